@@ -1,0 +1,319 @@
+#include "rig/dataset.hpp"
+
+#include "rig/file_io.hpp"
+#include "rig/pcd.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <sstream>
+
+namespace terrain::rig {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string frameName(int index, const char* suffix) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%06d%s", index, suffix);
+  return buf;
+}
+
+// round-trip formatting of doubles in CSV
+std::string g17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+json poseToJson(const Pose& p) {
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({p.matrix()(r, 0), p.matrix()(r, 1), p.matrix()(r, 2), p.matrix()(r, 3)});
+  return rows;
+}
+
+Pose poseFromJson(const json& j, const std::string& origin, const std::string& field) {
+  if (!j.is_array() || j.size() != 4) throw io::InputError(origin + ": '" + field + "' must be a 4x4 matrix");
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    if (!j[r].is_array() || j[r].size() != 4) throw io::InputError(origin + ": '" + field + "' must be a 4x4 matrix");
+    for (int c = 0; c < 4; ++c) m(r, c) = j[r][c].get<double>();
+  }
+  const Eigen::Matrix3d rot = m.topLeftCorner<3, 3>();
+  if (!((rot.transpose() * rot - Eigen::Matrix3d::Identity()).norm() < 1e-6)) {
+    throw io::InputError(origin + ": '" + field + "' rotation part is not orthonormal");
+  }
+  Pose p = Pose::Identity();
+  p.matrix() = m;
+  return p;
+}
+
+void writeImage(const fs::path& path, const cv::Mat& image) {
+  std::vector<uchar> buf;
+  const std::string ext = path.extension().string();
+  if (!cv::imencode(ext, image, buf)) throw io::InputError(path.string() + ": image encoding failed");
+  io::writeFileAtomic(path, std::string(buf.begin(), buf.end()), true);
+}
+
+cv::Mat readImage(const fs::path& path, int flags, int expected_type) {
+  const std::string bytes = io::readFile(path);
+  cv::Mat img = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())), flags);
+  if (img.empty()) throw io::InputError(path.string() + ": not a readable image");
+  if (img.type() != expected_type) throw io::InputError(path.string() + ": unexpected pixel type");
+  return img;
+}
+
+// splits CSV text into rows of numbers after a header line; names file and line on error
+std::vector<std::vector<double>> readCsv(const fs::path& path, std::size_t columns) {
+  std::istringstream in(io::readFile(path));
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<std::vector<double>> rows;
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty()) continue;
+    std::vector<double> row;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) {
+      try {
+        std::size_t used = 0;
+        row.push_back(std::stod(cell, &used));
+        if (used != cell.size()) throw std::invalid_argument(cell);
+      } catch (const std::exception&) {
+        throw io::InputError(path.string() + ":" + std::to_string(line_no) + ": '" + cell + "' is not a number");
+      }
+    }
+    if (row.size() != columns) {
+      throw io::InputError(path.string() + ":" + std::to_string(line_no) + ": expected " + std::to_string(columns) +
+                           " columns, found " + std::to_string(row.size()));
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+// entries of a time-sorted stream whose time lies in [start, end)
+template <typename T>
+std::vector<T> window(const std::vector<T>& all, double start, double end) {
+  std::vector<T> out;
+  for (const T& x : all) {
+    if (x.time >= start && x.time < end) out.push_back(x);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string calibrationToJson(const RigCalibration& c) {
+  json j;
+  j["camera"] = {{"width_px", c.camera.width}, {"height_px", c.camera.height}, {"fx_px", c.camera.fx},
+                 {"fy_px", c.camera.fy},       {"cx_px", c.camera.cx},         {"cy_px", c.camera.cy},
+                 {"model", "pinhole, no distortion; camera frame x right, y down, z forward"}};
+  j["vehicle_from_lidar"] = poseToJson(c.vehicle_from_lidar);
+  j["vehicle_from_camera"] = poseToJson(c.vehicle_from_camera);
+  j["vehicle_from_gps"] = poseToJson(c.vehicle_from_gps);
+  j["geodetic_origin"] = {{"latitude_deg", c.origin.latitude_deg},
+                          {"longitude_deg", c.origin.longitude_deg},
+                          {"altitude_m", c.origin.altitude_m}};
+  j["gyro_period_s"] = c.gyro_period;
+  return j.dump(1) + "\n";
+}
+
+RigCalibration calibrationFromJson(const std::string& text, const std::string& origin) {
+  RigCalibration c;
+  try {
+    const json j = json::parse(text);
+    const json& cam = j.at("camera");
+    c.camera.width = cam.at("width_px").get<int>();
+    c.camera.height = cam.at("height_px").get<int>();
+    c.camera.fx = cam.at("fx_px").get<double>();
+    c.camera.fy = cam.at("fy_px").get<double>();
+    c.camera.cx = cam.at("cx_px").get<double>();
+    c.camera.cy = cam.at("cy_px").get<double>();
+    c.vehicle_from_lidar = poseFromJson(j.at("vehicle_from_lidar"), origin, "vehicle_from_lidar");
+    c.vehicle_from_camera = poseFromJson(j.at("vehicle_from_camera"), origin, "vehicle_from_camera");
+    c.vehicle_from_gps = poseFromJson(j.at("vehicle_from_gps"), origin, "vehicle_from_gps");
+    const json& o = j.at("geodetic_origin");
+    c.origin = {o.at("latitude_deg").get<double>(), o.at("longitude_deg").get<double>(), o.at("altitude_m").get<double>()};
+    c.gyro_period = j.at("gyro_period_s").get<double>();
+  } catch (const json::exception& e) {
+    throw io::InputError(origin + ": " + e.what());
+  }
+  if (c.camera.width <= 0 || c.camera.height <= 0 || !(c.camera.fx > 0) || !(c.camera.fy > 0)) {
+    throw io::InputError(origin + ": camera size and focal lengths must be positive");
+  }
+  if (!(c.gyro_period > 0)) throw io::InputError(origin + ": gyro_period_s must be positive");
+  return c;
+}
+
+DatasetWriter::DatasetWriter(fs::path dir, const RigCalibration& calibration, const LaserCalibration& lasers,
+                             std::string producer_json, bool force)
+    : dir_(std::move(dir)), producer_json_(std::move(producer_json)) {
+  io::prepareOutputDir(dir_, force);
+  fs::create_directories(dir_ / "lidar");
+  fs::create_directories(dir_ / "camera");
+  // a stale manifest from an earlier recording would describe other data
+  std::error_code ec;
+  fs::remove(dir_ / "manifest.json", ec);
+  io::writeFileAtomic(dir_ / "calibration.json", calibrationToJson(calibration), true);
+  io::writeFileAtomic(dir_ / "lasers.yaml", laserCalibrationToYaml(lasers), true);
+  frames_.open(dir_ / "frames.csv", std::ios::trunc);
+  gps_.open(dir_ / "gps.csv", std::ios::trunc);
+  gyro_.open(dir_ / "gyro.csv", std::ios::trunc);
+  poses_.open(dir_ / "poses_gt.csv", std::ios::trunc);
+  if (!frames_ || !gps_ || !gyro_ || !poses_) throw io::InputError(dir_.string() + ": cannot create CSV files");
+  frames_ << "frame,sweep_start_s,sweep_end_s,camera_time_s,points\n";
+  gps_ << "time_s,latitude_deg,longitude_deg,altitude_m,sigma_m\n";
+  gyro_ << "time_s,wx_rad_s,wy_rad_s,wz_rad_s\n";
+  poses_ << "time_s,x_m,y_m,z_m,qw,qx,qy,qz\n";
+}
+
+DatasetWriter::~DatasetWriter() = default;
+
+void DatasetWriter::write(const RigFrame& frame) {
+  const SensorFrame& s = frame.sensors;
+  const int k = s.index;
+  has_truth_ = has_truth_ || frame.truth.has_value();
+  static const std::vector<PointTruth> kNoTruth;
+  io::writeFileAtomic(dir_ / "lidar" / frameName(k, ".pcd"),
+                      encodePcd(s.sweep, frame.truth ? frame.truth->points : kNoTruth), true);
+  if (s.image) {
+    cv::Mat bgr;
+    cv::cvtColor(s.image->rgb, bgr, cv::COLOR_RGB2BGR);
+    writeImage(dir_ / "camera" / frameName(k, ".png"), bgr);
+  }
+  if (frame.truth && !frame.truth->depth.empty()) writeImage(dir_ / "camera" / frameName(k, "_depth.tiff"), frame.truth->depth);
+  if (frame.truth && !frame.truth->segmentation.empty()) {
+    writeImage(dir_ / "camera" / frameName(k, "_seg.png"), frame.truth->segmentation);
+  }
+  frames_ << k << ',' << g17(s.sweep.start_time) << ',' << g17(s.sweep.end_time) << ','
+          << (s.image ? g17(s.image->time) : std::string("nan")) << ',' << s.sweep.points.size() << '\n';
+  for (const auto& f : s.gps) {
+    gps_ << g17(f.time) << ',' << g17(f.latitude_deg) << ',' << g17(f.longitude_deg) << ',' << g17(f.altitude_m)
+         << ',' << g17(f.sigma_m) << '\n';
+  }
+  for (const auto& g : s.gyro) gyro_ << g17(g.time) << ',' << g17(g.rate.x()) << ',' << g17(g.rate.y()) << ',' << g17(g.rate.z()) << '\n';
+  if (frame.truth) {
+    for (const auto& p : frame.truth->poses) {
+      const Eigen::Quaterniond q(p.world_from_vehicle.rotation());
+      const Vector3 t = p.world_from_vehicle.translation();
+      poses_ << g17(p.time) << ',' << g17(t.x()) << ',' << g17(t.y()) << ',' << g17(t.z()) << ',' << g17(q.w()) << ','
+             << g17(q.x()) << ',' << g17(q.y()) << ',' << g17(q.z()) << '\n';
+    }
+  }
+  for (auto* f : {&frames_, &gps_, &gyro_, &poses_}) f->flush();
+  ++count_;
+}
+
+void DatasetWriter::finish() {
+  if (finished_) return;
+  finished_ = true;
+  for (auto* f : {&frames_, &gps_, &gyro_, &poses_}) f->close();
+  json m;
+  m["format"] = kDatasetFormat;
+  m["frames"] = count_;
+  m["ground_truth"] = has_truth_;
+  m["producer"] = producer_json_.empty() ? json::object() : json::parse(producer_json_);
+  m["frames_and_units"] =
+      "world: ENU (x east, y north, z up) at calibration.json geodetic_origin; vehicle: x forward, y left, z up, "
+      "origin on the ground under the robot; lidar: x forward, y left, z up; camera: x right, y down, z forward. "
+      "Metres, radians, seconds.";
+  m["files"] = {
+      {"calibration.json", "camera intrinsics [px], 4x4 row-major extrinsics vehicle_from_{lidar,camera,gps}, "
+                           "geodetic origin of the world frame, gyro period [s]"},
+      {"lasers.yaml", "laser table in ROS velodyne driver YAML (vert_correction, rot_correction [rad], offsets [m])"},
+      {"frames.csv", "one row per frame: frame, sweep_start_s, sweep_end_s, camera_time_s (nan: no image), points"},
+      {"lidar/NNNNNN.pcd", "binary PCD, one per sweep: x y z [m, lidar frame at the firing time] float32, "
+                           "intensity [0-255] float32, ring (laser id) uint16, azimuth [rad, encoder] float32, "
+                           "time [s] float64, label (geom id hit, -1 none) int32, class (0 none, 1 ground, 2 building, "
+                           "3 trunk, 4 crown, 5 robot) uint8"},
+      {"camera/NNNNNN.png", "RGB image, 8 bit"},
+      {"camera/NNNNNN_depth.tiff", "ground truth depth along the optical axis [m], float32, 0 = nothing hit"},
+      {"camera/NNNNNN_seg.png", "ground truth segmentation, uint16 = geom id + 1, 0 = sky"},
+      {"gps.csv", "time_s, latitude_deg, longitude_deg, altitude_m (WGS84 ellipsoid), sigma_m"},
+      {"gyro.csv", "time_s, wx_rad_s, wy_rad_s, wz_rad_s: mean angular rate over the preceding gyro period, vehicle frame"},
+      {"poses_gt.csv", "ground truth world_from_vehicle: time_s, x_m, y_m, z_m, qw, qx, qy, qz"}};
+  io::writeFileAtomic(dir_ / "manifest.json", m.dump(1) + "\n", true);
+}
+
+DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
+  if (!fs::is_directory(dir_)) throw io::InputError(dir_.string() + ": not a directory");
+  const fs::path manifest_path = dir_ / "manifest.json";
+  if (!fs::exists(manifest_path)) {
+    throw io::InputError(dir_.string() + ": no manifest.json (not a dataset, or the recording did not finish)");
+  }
+  json m;
+  try {
+    m = json::parse(io::readFile(manifest_path));
+  } catch (const json::parse_error& e) {
+    throw io::InputError(manifest_path.string() + ": not valid JSON (" + e.what() + ")");
+  }
+  if (!m.is_object() || m.value("format", "") != kDatasetFormat) {
+    throw io::InputError(manifest_path.string() + ": 'format' must be " + kDatasetFormat);
+  }
+  has_truth_ = m.value("ground_truth", false);
+  producer_json_ = m.contains("producer") ? m["producer"].dump() : "{}";
+  calibration_ = calibrationFromJson(io::readFile(dir_ / "calibration.json"), (dir_ / "calibration.json").string());
+  lasers_ = loadLaserCalibration(dir_ / "lasers.yaml");
+  for (const auto& r : readCsv(dir_ / "frames.csv", 5)) {
+    frames_.push_back({static_cast<int>(r[0]), r[1], r[2], r[3], !std::isnan(r[3])});
+  }
+  const int declared = m.value("frames", -1);
+  if (declared != static_cast<int>(frames_.size())) {
+    throw io::InputError(manifest_path.string() + ": declares " + std::to_string(declared) + " frames, frames.csv has " +
+                         std::to_string(frames_.size()));
+  }
+  for (const auto& r : readCsv(dir_ / "gps.csv", 5)) gps_.push_back({r[0], r[1], r[2], r[3], r[4]});
+  for (const auto& r : readCsv(dir_ / "gyro.csv", 4)) gyro_.push_back({r[0], Vector3(r[1], r[2], r[3])});
+  if (has_truth_) {
+    for (const auto& r : readCsv(dir_ / "poses_gt.csv", 8)) {
+      TimedPose p;
+      p.time = r[0];
+      p.world_from_vehicle = Pose::Identity();
+      p.world_from_vehicle.translation() = Vector3(r[1], r[2], r[3]);
+      p.world_from_vehicle.linear() = Eigen::Quaterniond(r[4], r[5], r[6], r[7]).normalized().toRotationMatrix();
+      poses_.push_back(p);
+    }
+  }
+}
+
+std::optional<RigFrame> DatasetSource::next() {
+  if (cursor_ >= frames_.size()) return std::nullopt;
+  const FrameRow& row = frames_[cursor_++];
+  RigFrame f;
+  SensorFrame& s = f.sensors;
+  s.index = row.index;
+  const fs::path pcd_path = dir_ / "lidar" / frameName(row.index, ".pcd");
+  DecodedPcd pcd = decodePcd(io::readFile(pcd_path), pcd_path.string());
+  s.sweep.start_time = row.start;
+  s.sweep.end_time = row.end;
+  s.sweep.points = std::move(pcd.points);
+  if (row.has_camera) {
+    cv::Mat bgr = readImage(dir_ / "camera" / frameName(row.index, ".png"), cv::IMREAD_COLOR, CV_8UC3);
+    CameraImage img;
+    img.time = row.camera_time;
+    cv::cvtColor(bgr, img.rgb, cv::COLOR_BGR2RGB);
+    s.image = std::move(img);
+  }
+  s.gps = window(gps_, row.start, row.end);
+  s.gyro = window(gyro_, row.start, row.end);
+  if (has_truth_) {
+    FrameTruth t;
+    t.points = std::move(pcd.truth);
+    const fs::path depth = dir_ / "camera" / frameName(row.index, "_depth.tiff");
+    const fs::path seg = dir_ / "camera" / frameName(row.index, "_seg.png");
+    if (fs::exists(depth)) t.depth = readImage(depth, cv::IMREAD_UNCHANGED, CV_32FC1);
+    if (fs::exists(seg)) t.segmentation = readImage(seg, cv::IMREAD_UNCHANGED, CV_16UC1);
+    t.poses = window(poses_, row.start, row.end);
+    f.truth = std::move(t);
+  }
+  return f;
+}
+
+}  // namespace terrain::rig

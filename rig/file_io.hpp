@@ -1,0 +1,29 @@
+#pragma once
+// Safe output: files are written to a temporary name and renamed into place, so a failed write
+// never leaves a half-written file, and an existing file or directory is never replaced unless
+// the caller allows it.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace terrain::io {
+
+// Error in user input (a file, a parameter): the message names what is wrong and where.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Reads a whole file. Throws InputError naming the file if it cannot be read.
+std::string readFile(const std::filesystem::path& path);
+
+// Writes bytes to path atomically (temporary file, then rename). Throws InputError if the file
+// exists and overwrite is false, or if the write fails.
+void writeFileAtomic(const std::filesystem::path& path, const std::string& bytes, bool overwrite);
+
+// Prepares an output directory: creates it if absent. If it exists and is not empty, throws
+// InputError unless force is true.
+void prepareOutputDir(const std::filesystem::path& dir, bool force);
+
+}  // namespace terrain::io

@@ -1,0 +1,107 @@
+#include "sim/world.hpp"
+
+#include "rig/file_io.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace terrain::sim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// loads MJCF text through a virtual file system so that inline scenes need no file on disk
+mjModel* loadFromText(const std::string& text, const std::string& origin) {
+  mjVFS vfs;
+  mj_defaultVFS(&vfs);
+  const char* name = "scene.xml";
+  if (mj_makeEmptyFileVFS(&vfs, name, static_cast<int>(text.size())) != 0) {
+    throw io::InputError(origin + ": cannot create a virtual file for the scene");
+  }
+  const int i = mj_findFileVFS(&vfs, name);
+  std::memcpy(vfs.filedata[i], text.data(), text.size());
+  char error[1024] = "";
+  mjModel* m = mj_loadXML(name, &vfs, error, sizeof error);
+  mj_deleteVFS(&vfs);
+  if (!m) throw io::InputError(origin + ": MuJoCo could not load the scene: " + error);
+  return m;
+}
+
+}  // namespace
+
+World::World(const fs::path& scene_xml) : scene_path_(scene_xml) {
+  if (!fs::exists(scene_xml)) throw io::InputError(scene_xml.string() + ": no such scene file");
+  const fs::path truth_path = scenes::truthPathFor(scene_xml);
+  if (!fs::exists(truth_path)) {
+    throw io::InputError(truth_path.string() + ": ground-truth sidecar is missing (generate scenes with 'terrain scenes generate')");
+  }
+  truth_ = scenes::loadTruth(truth_path);
+  char error[1024] = "";
+  model_ = mj_loadXML(scene_xml.c_str(), nullptr, error, sizeof error);
+  if (!model_) {
+    std::string msg = error;
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+    for (auto& ch : msg) ch = ch == '\n' ? ' ' : ch;
+    throw io::InputError(scene_xml.string() + ": MuJoCo could not load the scene: " + msg);
+  }
+  finishLoading();
+}
+
+World::World(const std::string& mjcf_text, scenes::SceneTruth truth) : truth_(std::move(truth)) {
+  model_ = loadFromText(mjcf_text, "(inline scene)");
+  finishLoading();
+}
+
+World::~World() {
+  if (data_) mj_deleteData(data_);
+  if (model_) mj_deleteModel(model_);
+}
+
+void World::finishLoading() {
+  data_ = mj_makeData(model_);
+  mj_forward(model_, data_);
+  classes_.assign(model_->ngeom, scenes::GeomClass::None);
+  for (const auto& [name, cls] : truth_.geomClasses()) {
+    const int id = mj_name2id(model_, mjOBJ_GEOM, name.c_str());
+    if (id < 0) {
+      if (cls == scenes::GeomClass::Robot) continue;  // scenes without a robot body
+      throw io::InputError("scene and truth disagree: truth names geom '" + name + "', which the scene lacks");
+    }
+    classes_[id] = cls;
+  }
+  robot_body_ = mj_name2id(model_, mjOBJ_BODY, "robot");
+  terrain_geom_ = mj_name2id(model_, mjOBJ_GEOM, truth_.terrain.geom.c_str());
+  if (terrain_geom_ < 0) throw io::InputError("scene has no terrain geom named '" + truth_.terrain.geom + "'");
+  // a start height above everything in the scene, for downward rays
+  double top = 0;
+  for (int g = 0; g < model_->ngeom; ++g) {
+    if (model_->geom_type[g] == mjGEOM_PLANE) continue;
+    top = std::max(top, data_->geom_xpos[3 * g + 2] + model_->geom_rbound[g]);
+  }
+  top_z_ = top + 10.0;
+}
+
+double World::terrainHeight(double x, double y) const {
+  const mjtNum pnt[3] = {x, y, top_z_}, down[3] = {0, 0, -1};
+  const int type = model_->geom_type[terrain_geom_];
+  mjtNum d = -1;
+  if (type == mjGEOM_HFIELD) {
+    d = mj_rayHfield(model_, data_, terrain_geom_, pnt, down);
+  } else {
+    d = mju_rayGeom(data_->geom_xpos + 3 * terrain_geom_, data_->geom_xmat + 9 * terrain_geom_,
+                    model_->geom_size + 3 * terrain_geom_, pnt, down, type);
+  }
+  return d < 0 ? std::numeric_limits<double>::quiet_NaN() : top_z_ - d;
+}
+
+double World::surfaceHeight(double x, double y, int* geom) const {
+  const mjtNum pnt[3] = {x, y, top_z_}, down[3] = {0, 0, -1};
+  int id = -1;
+  const mjtNum d = mj_ray(model_, data_, pnt, down, nullptr, 1, robot_body_, &id);
+  if (geom) *geom = id;
+  return d < 0 ? std::numeric_limits<double>::quiet_NaN() : top_z_ - d;
+}
+
+}  // namespace terrain::sim

@@ -1,0 +1,60 @@
+#pragma once
+// The MuJoCo world: a generated scene loaded with its ground truth. Read-only after loading;
+// every sensor takes what it needs from here.
+
+#include "scenes/scene_truth.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace terrain::sim {
+
+class World {
+ public:
+  // Loads FILE.xml and FILE.truth.json. Throws io::InputError with MuJoCo's parse message (and
+  // its line) for a malformed scene, or naming the missing geom for an inconsistent sidecar.
+  explicit World(const std::filesystem::path& scene_xml);
+  // Loads MJCF text with the given truth (tests use tiny inline scenes).
+  World(const std::string& mjcf_text, scenes::SceneTruth truth);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  const mjModel* model() const { return model_; }
+  const mjData* data() const { return data_; }
+  const scenes::SceneTruth& truth() const { return truth_; }
+  const std::filesystem::path& scenePath() const { return scene_path_; }
+
+  // class of a geom id (GeomClass::None for -1 or unnamed geoms)
+  scenes::GeomClass geomClass(int geom) const {
+    return geom >= 0 && geom < static_cast<int>(classes_.size()) ? classes_[geom] : scenes::GeomClass::None;
+  }
+  // body id of the robot, excluded from lidar rays; -1 if the scene has no robot
+  int robotBody() const { return robot_body_; }
+  // geom id of the terrain
+  int terrainGeom() const { return terrain_geom_; }
+
+  // True terrain height [m] at (x, y), from a downward ray against the terrain geom only;
+  // NaN outside the terrain.
+  double terrainHeight(double x, double y) const;
+  // True height [m] of the highest surface at (x, y): terrain or any object; NaN if none.
+  double surfaceHeight(double x, double y, int* geom = nullptr) const;
+
+ private:
+  void finishLoading();
+
+  std::filesystem::path scene_path_;
+  mjModel* model_ = nullptr;
+  mjData* data_ = nullptr;
+  scenes::SceneTruth truth_;
+  std::vector<scenes::GeomClass> classes_;
+  int robot_body_ = -1;
+  int terrain_geom_ = -1;
+  double top_z_ = 1000;
+};
+
+}  // namespace terrain::sim
