@@ -36,30 +36,33 @@ class Reader {
  public:
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
+  static std::string join(const std::string& where, const std::string& key) {
+    return where.empty() ? key : where + "." + key;
+  }
   const json& at(const json& j, const std::string& key, const std::string& where) const {
-    if (!j.is_object() || !j.contains(key)) fail(where + "." + key, "missing");
+    if (!j.is_object() || !j.contains(key)) fail(join(where, key), "missing");
     return j.at(key);
   }
   double number(const json& j, const std::string& key, const std::string& where) const {
     const json& v = at(j, key, where);
-    if (!v.is_number()) fail(where + "." + key, "must be a number");
+    if (!v.is_number()) fail(join(where, key), "must be a number");
     const double x = v.get<double>();
-    if (!std::isfinite(x)) fail(where + "." + key, "must be finite");
+    if (!std::isfinite(x)) fail(join(where, key), "must be finite");
     return x;
   }
   std::string string(const json& j, const std::string& key, const std::string& where) const {
     const json& v = at(j, key, where);
-    if (!v.is_string()) fail(where + "." + key, "must be a string");
+    if (!v.is_string()) fail(join(where, key), "must be a string");
     return v.get<std::string>();
   }
   std::vector<Eigen::Vector2d> points(const json& j, const std::string& key,
                                       const std::string& where) const {
     const json& v = at(j, key, where);
-    if (!v.is_array()) fail(where + "." + key, "must be an array of [x, y]");
+    if (!v.is_array()) fail(join(where, key), "must be an array of [x, y]");
     std::vector<Eigen::Vector2d> out;
     for (const auto& p : v) {
       if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number()) {
-        fail(where + "." + key, "every entry must be [x, y]");
+        fail(join(where, key), "every entry must be [x, y]");
       }
       out.emplace_back(p[0].get<double>(), p[1].get<double>());
     }

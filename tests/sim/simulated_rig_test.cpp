@@ -1,0 +1,270 @@
+#include "sim/simulated_rig.hpp"
+
+#include "rig/dataset.hpp"
+#include "rig/file_io.hpp"
+#include "scenes/scene_generator.hpp"
+#include "tests/test_support.hpp"
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <opencv2/core.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace terrain::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::shared_ptr<World> generatedWorld(const test::TempDir& dir, const std::string& type, std::uint64_t seed) {
+  scenes::SceneConfig cfg;
+  cfg.type = type;
+  cfg.seed = seed;
+  cfg.extent = 40;
+  const fs::path xml = dir / (type + ".xml");
+  scenes::writeScene(scenes::generateScene(cfg), xml, true);
+  return std::make_shared<World>(xml);
+}
+
+SimConfig smallCamera() {
+  SimConfig c;
+  c.camera.width = 160;
+  c.camera.height = 120;
+  return c;
+}
+
+TEST(SimulatedRigTest, LidarPointsProjectOntoPixelsOfTheSameGeom) {
+  test::TempDir dir;
+  auto world = generatedWorld(dir, "urban", 2);
+  SimConfig cfg = smallCamera();
+  cfg.lidar.range_noise = 0;
+  SimulatedRig rig(world, cfg, 1);
+  const auto f = rig.next();
+  ASSERT_TRUE(f->sensors.image.has_value());
+  const CameraIntrinsics& k = rig.calibration().camera;
+  const Pose camera_from_world =
+      (rig.trajectory().worldFromVehicle(f->sensors.image->time) * rig.calibration().vehicle_from_camera).inverse();
+  int checked = 0, same = 0;
+  for (std::size_t i = 0; i < f->sensors.sweep.points.size(); ++i) {
+    const auto& p = f->sensors.sweep.points[i];
+    const Pose world_from_lidar = rig.trajectory().worldFromVehicle(p.time) * rig.calibration().vehicle_from_lidar;
+    const Vector3 c = camera_from_world * (world_from_lidar * Vector3(p.x, p.y, p.z));
+    if (c.z() < 1.0) continue;
+    const int u = static_cast<int>(std::floor(k.fx * c.x() / c.z() + k.cx));
+    const int v = static_cast<int>(std::floor(k.fy * c.y() / c.z() + k.cy));
+    if (u < 1 || v < 1 || u >= k.width - 1 || v >= k.height - 1) continue;
+    // only points the camera sees: the depth image agrees with the point's depth
+    const float depth = f->truth->depth.at<float>(v, u);
+    if (std::abs(depth - c.z()) > 0.02 * c.z() + 0.05) continue;
+    ++checked;
+    same += f->truth->segmentation.at<std::uint16_t>(v, u) == f->truth->points[i].geom + 1;
+  }
+  ASSERT_GT(checked, 2000);
+  EXPECT_GT(static_cast<double>(same) / checked, 0.98) << same << " of " << checked;
+}
+
+TEST(SimulatedRigTest, GpsConvertsBackToTheTruePositionWithinItsNoise) {
+  auto world = test::wallWorld(30.0);
+  SimConfig cfg = smallCamera();
+  cfg.camera.enabled = false;
+  cfg.gps.horizontal_sigma = 0.05;
+  cfg.gps.vertical_sigma = 0.1;
+  SimulatedRig rig(world, cfg, 20);
+  const GeodeticOrigin o = rig.calibration().origin;
+  const GeographicLib::LocalCartesian enu(o.latitude_deg, o.longitude_deg, o.altitude_m);
+  int n = 0;
+  double sum2 = 0;
+  while (auto f = rig.next()) {
+    for (const auto& fix : f->sensors.gps) {
+      double x, y, z;
+      enu.Forward(fix.latitude_deg, fix.longitude_deg, fix.altitude_m, x, y, z);
+      const Vector3 truth = rig.trajectory().worldFromVehicle(fix.time) * rig.calibration().vehicle_from_gps.translation();
+      EXPECT_LT(std::abs(x - truth.x()), 5 * 0.05);
+      EXPECT_LT(std::abs(y - truth.y()), 5 * 0.05);
+      EXPECT_LT(std::abs(z - truth.z()), 5 * 0.1);
+      sum2 += (x - truth.x()) * (x - truth.x()) + (y - truth.y()) * (y - truth.y());
+      ++n;
+    }
+  }
+  ASSERT_EQ(n, 20);  // one fix per frame at 10 Hz
+  EXPECT_NEAR(std::sqrt(sum2 / (2 * n)), 0.05, 0.025);
+}
+
+TEST(SimulatedRigTest, IntegratedGyroWithoutNoiseReproducesTheTrueOrientation) {
+  test::TempDir dir;
+  auto world = generatedWorld(dir, "rough", 4);  // pitch and roll change all the time
+  GyroConfig cfg;
+  cfg.noise_sigma = 0;
+  const GyroModel gyro(cfg, 1);
+  const Trajectory trajectory(*world, world->truth().path, RobotConfig{});
+  Eigen::Matrix3d r = trajectory.worldFromVehicle(0).linear();
+  const Eigen::Matrix3d r0 = r;
+  double worst = 0, turned = 0;
+  const double dt = gyro.period();
+  for (int k = 1; k <= 800; ++k) {  // 4 s
+    const GyroSample g = gyro.sample(k, k * dt, trajectory.worldFromVehicle((k - 1) * dt).linear(),
+                                     trajectory.worldFromVehicle(k * dt).linear());
+    if (g.rate.norm() > 0) r = r * Eigen::AngleAxisd(g.rate.norm() * dt, g.rate.normalized()).toRotationMatrix();
+    const Eigen::Matrix3d truth = trajectory.worldFromVehicle(g.time).linear();
+    worst = std::max(worst, Eigen::AngleAxisd(truth.transpose() * r).angle());
+    turned = std::max(turned, Eigen::AngleAxisd(r0.transpose() * truth).angle());
+  }
+  EXPECT_GT(turned, 0.01) << "the robot must actually rotate for this test to mean anything";
+  EXPECT_LT(worst, 1e-9);
+}
+
+TEST(SimulatedRigTest, GyroSamplesCoverEachFrameAtTheirRate) {
+  auto world = test::wallWorld(30.0);
+  SimConfig cfg = smallCamera();
+  cfg.camera.enabled = false;
+  SimulatedRig rig(world, cfg, 3);
+  std::vector<double> times;
+  while (auto f = rig.next()) {
+    for (const auto& g : f->sensors.gyro) {
+      EXPECT_GE(g.time, f->sensors.sweep.start_time);
+      EXPECT_LT(g.time, f->sensors.sweep.end_time);
+      times.push_back(g.time);
+    }
+  }
+  ASSERT_EQ(times.size(), 59u);  // 200 Hz over 0.3 s, the sample at t = 0 has no interval
+  for (std::size_t i = 1; i < times.size(); ++i) EXPECT_NEAR(times[i] - times[i - 1], 0.005, 1e-12);
+}
+
+// reads every file of a directory tree into a map path -> bytes
+std::map<std::string, std::string> readTree(const fs::path& root) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    if (e.is_regular_file()) out[fs::relative(e.path(), root).string()] = io::readFile(e.path());
+  }
+  return out;
+}
+
+void recordTo(const std::shared_ptr<World>& world, const SimConfig& cfg, int frames, const fs::path& out) {
+  SimulatedRig rig(world, cfg, frames);
+  rig::DatasetWriter writer(out, rig.calibration(), rig.lasers(), "{}", false);
+  while (auto f = rig.next()) writer.write(*f);
+  writer.finish();
+}
+
+TEST(SimulatedRigTest, SameSeedGivesByteIdenticalDatasetsWhateverTheThreadCount) {
+  test::TempDir dir;
+  auto world = generatedWorld(dir, "urban", 5);
+  SimConfig one = smallCamera();
+  one.threads = 1;
+  SimConfig two = one;
+  two.threads = 2;
+  recordTo(world, one, 2, dir / "a");
+  recordTo(world, two, 2, dir / "b");
+  const auto a = readTree(dir / "a"), b = readTree(dir / "b");
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GE(a.size(), 14u);
+  for (const auto& [name, bytes] : a) {
+    ASSERT_TRUE(b.count(name)) << name;
+    EXPECT_TRUE(bytes == b.at(name)) << name << " differs";
+  }
+  // and another seed gives other data
+  SimConfig other = one;
+  other.seed = 2;
+  recordTo(world, other, 1, dir / "c");
+  EXPECT_NE(readTree(dir / "c").at("lidar/000000.pcd"), a.at("lidar/000000.pcd"));
+}
+
+TEST(SimulatedRigTest, RecordedDatasetReadsBackFrameForFrameIdentical) {
+  test::TempDir dir;
+  auto world = generatedWorld(dir, "urban", 6);
+  const SimConfig cfg = smallCamera();
+  recordTo(world, cfg, 3, dir / "ds");
+  SimulatedRig rig(world, cfg, 3);
+  rig::DatasetSource source(dir / "ds");
+  EXPECT_EQ(source.frameCount(), 3);
+  EXPECT_TRUE(source.calibration().vehicle_from_camera.isApprox(rig.calibration().vehicle_from_camera, 0));
+  EXPECT_EQ(source.lasers().laserCount(), 64);
+  for (int k = 0; k < 3; ++k) {
+    const auto live = rig.next();
+    const auto read = source.next();
+    ASSERT_TRUE(live && read);
+    const SensorFrame &a = live->sensors, &b = read->sensors;
+    EXPECT_EQ(a.index, b.index);
+    EXPECT_EQ(a.sweep.start_time, b.sweep.start_time);
+    ASSERT_EQ(a.sweep.points.size(), b.sweep.points.size());
+    for (std::size_t i = 0; i < a.sweep.points.size(); ++i) {
+      const auto &p = a.sweep.points[i], &q = b.sweep.points[i];
+      ASSERT_TRUE(p.x == q.x && p.y == q.y && p.z == q.z && p.intensity == q.intensity && p.ring == q.ring &&
+                  p.azimuth == q.azimuth && p.time == q.time)
+          << "frame " << k << " point " << i;
+      ASSERT_EQ(live->truth->points[i].geom, read->truth->points[i].geom);
+      ASSERT_EQ(live->truth->points[i].cls, read->truth->points[i].cls);
+    }
+    ASSERT_EQ(a.gps.size(), b.gps.size());
+    for (std::size_t i = 0; i < a.gps.size(); ++i) {
+      EXPECT_EQ(a.gps[i].latitude_deg, b.gps[i].latitude_deg);
+      EXPECT_EQ(a.gps[i].longitude_deg, b.gps[i].longitude_deg);
+      EXPECT_EQ(a.gps[i].altitude_m, b.gps[i].altitude_m);
+    }
+    ASSERT_EQ(a.gyro.size(), b.gyro.size());
+    for (std::size_t i = 0; i < a.gyro.size(); ++i) EXPECT_EQ(a.gyro[i].rate, b.gyro[i].rate);
+    ASSERT_TRUE(b.image.has_value());
+    EXPECT_EQ(cv::norm(a.image->rgb, b.image->rgb, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(live->truth->depth, read->truth->depth, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(live->truth->segmentation, read->truth->segmentation, cv::NORM_INF), 0.0);
+    ASSERT_EQ(live->truth->poses.size(), read->truth->poses.size());
+    for (std::size_t i = 0; i < live->truth->poses.size(); ++i) {
+      EXPECT_TRUE(live->truth->poses[i].world_from_vehicle.isApprox(read->truth->poses[i].world_from_vehicle, 1e-12));
+    }
+  }
+  EXPECT_FALSE(source.next().has_value());
+}
+
+TEST(SimulatedRigTest, CameraFrameShowsTheTopsTheLidarMisses) {
+  test::TempDir dir;
+  auto world = generatedWorld(dir, "urban", 1);
+  SimulatedRig rig(world, smallCamera(), 1);
+  const auto f = rig.next();
+  // lidar: nothing above the cap; camera: building pixels well above the sensor
+  double highest_lidar = -1e9;
+  const Pose vehicle = rig.trajectory().worldFromVehicle(0) * rig.calibration().vehicle_from_lidar;
+  for (const auto& p : f->sensors.sweep.points) highest_lidar = std::max(highest_lidar, static_cast<double>(p.z));
+  EXPECT_LE(highest_lidar, 1.5);
+  const CameraIntrinsics& k = rig.calibration().camera;
+  const Pose world_from_camera = rig.trajectory().worldFromVehicle(0) * rig.calibration().vehicle_from_camera;
+  double highest_seen = -1e9;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const int geom = f->truth->segmentation.at<std::uint16_t>(v, u) - 1;
+      if (world->geomClass(geom) != scenes::GeomClass::Building) continue;
+      const double z = f->truth->depth.at<float>(v, u);
+      const Vector3 c((u + 0.5 - k.cx) / k.fx * z, (v + 0.5 - k.cy) / k.fy * z, z);
+      highest_seen = std::max(highest_seen, (world_from_camera * c).z() - vehicle.translation().z());
+    }
+  }
+  EXPECT_GT(highest_seen, 5.0);
+}
+
+TEST(SimulatedRigTest, RefusesOutOfRangeSettingsWithTheAllowedRange) {
+  auto world = test::wallWorld(10.0);
+  auto expectRefused = [&](SimConfig c, const std::string& field) {
+    try {
+      SimulatedRig rig(world, c, 1);
+      ADD_FAILURE() << field << " was accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("allowed"), std::string::npos) << e.what();
+    }
+  };
+  SimConfig c;
+  c.camera.fovy_deg = 180;
+  expectRefused(c, "camera.fovy_deg");
+  c = SimConfig{};
+  c.lidar.max_range = -5;
+  expectRefused(c, "lidar.max_range");
+  c = SimConfig{};
+  c.lidar.rotation_hz = 20;
+  expectRefused(c, "lidar.rotation_hz");
+  c = SimConfig{};
+  c.camera.fovy_deg = 0;
+  expectRefused(c, "camera.fovy_deg");
+}
+
+}  // namespace
+}  // namespace terrain::sim

@@ -1,0 +1,77 @@
+#pragma once
+// Helpers shared by the tests: scratch directories and tiny inline worlds.
+
+#include "scenes/scene_truth.hpp"
+#include "sim/world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <string>
+
+namespace terrain::test {
+
+// A fresh directory under the system temp folder, removed when the object goes.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = std::filesystem::temp_directory_path() /
+            ("terrain_test_" + std::string(info ? info->name() : "x") + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A flat plane named "ground", a wall (class building) whose near face is at x = wall_x, and
+// the robot body with its camera, as generated scenes have them.
+inline std::string wallScene(double wall_x) {
+  const double cx = wall_x + 0.5;
+  return R"(<mujoco>
+  <statistic extent="100" center="0 0 0"/>
+  <visual><global offwidth="160" offheight="120"/><quality offsamples="0"/><map znear="0.002" zfar="3"/></visual>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <light directional="true" pos="0 0 50" dir="0 0 -1"/>
+    <geom name="ground" type="plane" size="60 60 1" rgba="0.3 0.5 0.3 1"/>
+    <geom name="wall" type="box" pos=")" +
+         std::to_string(cx) + R"( 0 10" size="0.5 40 10" rgba="0.7 0.7 0.7 1" group="1"/>
+    <body name="robot" mocap="true">
+      <geom name="robot_chassis" type="box" size="0.5 0.35 0.2" pos="0 0 0.35" group="3"/>
+      <geom name="robot_mast" type="cylinder" size="0.04 0.8" pos="0 0 1" group="3"/>
+      <camera name="robot_camera" pos="0.1 0 1.6" xyaxes="0 -1 0 0 0 1" fovy="60"/>
+    </body>
+  </worldbody>
+</mujoco>)";
+}
+
+inline scenes::SceneTruth wallTruth(double wall_x) {
+  scenes::SceneTruth t;
+  t.type = "test";
+  t.extent = 60;
+  t.terrain.kind = "plane";
+  scenes::ObjectTruth wall;
+  wall.id = "wall";
+  wall.object_class = scenes::GeomClass::Building;
+  wall.geoms = {"wall"};
+  wall.footprint = {{wall_x, -40}, {wall_x + 1, -40}, {wall_x + 1, 40}, {wall_x, 40}};
+  wall.top_height = 20;
+  t.objects.push_back(wall);
+  t.path = {{0, 0}, {1, 0}};
+  t.origin = {37.5585, 126.999, 60.0};
+  return t;
+}
+
+inline std::shared_ptr<sim::World> wallWorld(double wall_x) {
+  return std::make_shared<sim::World>(wallScene(wall_x), wallTruth(wall_x));
+}
+
+}  // namespace terrain::test
