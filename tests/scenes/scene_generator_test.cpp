@@ -140,3 +140,22 @@ TEST(WorldTest, MalformedScenesGetMuJoCosMessageWithTheLine) {
 
 }  // namespace
 }  // namespace terrain::scenes
+
+namespace terrain::scenes {
+namespace {
+
+// the committed scenes are exactly what the generator makes today
+TEST(SceneGeneratorTest, CommittedLibraryScenesMatchTheGenerator) {
+  const std::filesystem::path library = std::filesystem::path(TERRAIN_SOURCE_DIR) / "scenes" / "library";
+  test::TempDir dir;
+  for (const char* type : {"urban", "forest", "rough"}) {
+    const std::string name = std::string(type) + "_1";
+    writeScene(generateScene(SceneConfig{type, 1}), dir / (name + ".xml"), false);
+    for (const char* ext : {".xml", ".truth.json", ".hfield"}) {
+      EXPECT_TRUE(io::readFile(library / (name + ext)) == io::readFile(dir / (name + ext))) << name << ext;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace terrain::scenes
