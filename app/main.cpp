@@ -1,7 +1,13 @@
 // terrain: the testbed's command-line entry point. Subcommands:
 //   scenes generate   write a generated MJCF scene with its ground truth
 //   record            drive a scene with the simulated rig and write a dataset
+//   reconstruct       run the pipeline over a recorded dataset
+//   run               generate a scene, simulate and reconstruct in one go
+#include "app/bounded_queue.hpp"
+#include "app/outputs.hpp"
+#include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
+#include "core/pipeline.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
 #include "scenes/scene_generator.hpp"
@@ -10,31 +16,38 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <exception>
+#include <iomanip>
 #include <iostream>
+#include <thread>
 
 namespace {
 
 using namespace terrain;
 namespace fs = std::filesystem;
 
-// the value of "--config FILE" if present, read before the other options so that the command line
-// overrides the file
-std::string preScanConfig(int argc, char** argv) {
+// the value of an option such as "--config FILE" if present, read before the other options so
+// that the command line overrides the file
+std::string preScan(int argc, char** argv, const std::string& name) {
   for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--config") == 0) return argv[i + 1];
+    if (argv[i] == name) return argv[i + 1];
   }
   for (int i = 1; i < argc; ++i) {
-    if (std::strncmp(argv[i], "--config=", 9) == 0) return argv[i] + 9;
+    const std::string a = argv[i];
+    if (a.rfind(name + "=", 0) == 0) return a.substr(name.size() + 1);
   }
   return {};
 }
 
+bool isSubcommand(int argc, char** argv, const char* name) { return argc > 1 && std::strcmp(argv[1], name) == 0; }
+
 // options that fill the simulation settings; defaults shown in --help
-void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file) {
-  cmd.add_option("--config", config_file, "YAML file with simulation settings (sections robot, lidar, camera, gps, gyro); "
-                                          "command-line options override it");
+void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, const std::string& flag) {
+  cmd.add_option(flag, config_file, "YAML file with simulation settings (sections robot, lidar, camera, gps, gyro); "
+                                    "command-line options override it");
   cmd.add_option("--seed", c.seed, "noise seed")->capture_default_str();
   cmd.add_option("--threads", c.threads, "lidar worker threads, 0 = all cores (output does not depend on it)")->capture_default_str();
   cmd.add_option("--speed", c.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
@@ -55,6 +68,98 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file) {
   cmd.add_option("--gps-sigma", c.gps.horizontal_sigma, "GPS horizontal 1-sigma noise [m]")->capture_default_str();
   cmd.add_option("--gyro-noise", c.gyro.noise_sigma, "gyro 1-sigma noise [rad/s]")->capture_default_str();
   cmd.add_option("--gyro-bias", c.gyro.bias_sigma, "1-sigma of the constant gyro bias [rad/s]")->capture_default_str();
+}
+
+// options that fill the pipeline settings; defaults shown in --help
+void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_file, std::string& histogram,
+                        std::string& solver) {
+  cmd.add_option("--config", config_file, "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
+                                          "estimation); command-line options override it");
+  cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
+  cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
+      ->capture_default_str();
+  cmd.add_option("--solver", solver, "GMRF solver: icm or mincut (exact)")->capture_default_str();
+  cmd.add_option("--delta", c.ground.delta, "half-width of the ground band around the histogram peak [m]")->capture_default_str();
+  cmd.add_option("--alpha", c.ground.alpha, "GMRF single-site weight")->capture_default_str();
+  cmd.add_option("--beta", c.ground.beta, "GMRF pair-site Potts weight")->capture_default_str();
+  cmd.add_option("--gamma", c.ground.gamma, "GMRF pair-site height-contrast weight")->capture_default_str();
+  cmd.add_option("--tile-size", c.ground.tile_size, "local histogram tile edge [m]")->capture_default_str();
+  cmd.add_option("--segment-every", c.segment_every, "run ground segmentation every N frames")->capture_default_str();
+  cmd.add_option("--boundary-threshold", c.boundary.threshold, "boundary gradient threshold (grey levels)")->capture_default_str();
+  cmd.add_option("--kx", c.boundary.kx, "weight of horizontal change in the gradient")->capture_default_str();
+  cmd.add_option("--ky", c.boundary.ky, "weight of vertical change in the gradient")->capture_default_str();
+  cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")->capture_default_str();
+}
+
+void applyChoices(PipelineConfig& c, const std::string& histogram, const std::string& solver) {
+  if (!parseHistogram(histogram, c.ground.histogram)) throw io::InputError("--histogram must be local or global, not '" + histogram + "'");
+  if (!parseSolver(solver, c.ground.solver)) throw io::InputError("--solver must be icm or mincut, not '" + solver + "'");
+  app::validate(c);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// sensing on its own thread, processing on this one; writes the outputs into out
+void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out) {
+  Pipeline pipeline(source.calibration(), config);
+  app::BoundedQueue<SensorFrame> queue(4);
+  std::exception_ptr sensing_error;
+  std::thread sensing([&] {
+    try {
+      while (auto f = source.next()) {
+        if (!queue.push(std::move(f->sensors))) break;
+      }
+    } catch (...) {
+      sensing_error = std::current_exception();
+    }
+    queue.close();
+  });
+  const fs::path boundary_dir = out / "boundaries";
+  fs::create_directories(boundary_dir);
+  app::Progress progress("reconstruct", source.frameCount());
+  int done = 0, last_written = -1;
+  try {
+    while (auto frame = queue.pop()) {
+      const int before = pipeline.lastBoundaryFrame();
+      pipeline.process(*frame);
+      // boundary images of every tenth frame (paper Fig. 7)
+      if (pipeline.lastBoundaryFrame() != before && pipeline.lastBoundaryFrame() % 10 == 0 &&
+          pipeline.lastBoundaryFrame() != last_written && frame->image) {
+        last_written = pipeline.lastBoundaryFrame();
+        app::writeBoundaryImages(boundary_dir, last_written, pipeline.lastBoundaries(),
+                                 last_written == frame->index ? frame->image->rgb : cv::Mat());
+      }
+      progress.update(++done);
+    }
+  } catch (...) {
+    queue.close();
+    sensing.join();
+    throw;
+  }
+  sensing.join();
+  if (sensing_error) std::rethrow_exception(sensing_error);
+  pipeline.finish();
+  app::writeReconstruction(out, pipeline);
+  // summary
+  std::vector<double> total, seg;
+  for (const auto& r : pipeline.records()) total.push_back(r.total_ms), seg.push_back(r.segmentation_ms);
+  std::size_t recovered = 0;
+  for (const auto& v : pipeline.mesh().vertices()) recovered += !v.estimates.empty();
+  const auto& s = pipeline.segmentation();
+  std::size_t ground = 0;
+  for (auto g : s.refined) ground += g;
+  std::cout << std::fixed << std::setprecision(1) << "frames " << pipeline.records().size() << ", voxels "
+            << pipeline.map().size() << " (" << ground << " ground), mesh vertices " << pipeline.mesh().vertices().size()
+            << " (" << recovered << " raised by boundary estimation)\n"
+            << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
+            << "per frame: median " << median(total) << " ms in all, " << median(seg) << " ms ground segmentation\n";
+  for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
+  std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/ into "
+            << fs::absolute(out).string() << "\n";
 }
 
 int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool force) {
@@ -115,7 +220,7 @@ int main(int argc, char** argv) {
   // terrain record
   CLI::App* rec = app.add_subcommand("record", "drive a scene with the simulated rig and write a dataset");
   sim::SimConfig sim_cfg;
-  std::string config_file = preScanConfig(argc, argv);
+  std::string config_file = isSubcommand(argc, argv, "record") ? preScan(argc, argv, "--config") : "";
   fs::path rec_scene, rec_out;
   int rec_frames = 60;
   bool rec_force = false;
@@ -129,12 +234,74 @@ int main(int argc, char** argv) {
     std::cerr << "terrain: error: " << e.what() << "\n";
     return 2;
   }
-  addSimOptions(*rec, sim_cfg, config_file);
+  addSimOptions(*rec, sim_cfg, config_file, "--config");
+
+  // terrain reconstruct
+  CLI::App* recon = app.add_subcommand("reconstruct", "run the pipeline over a recorded dataset");
+  PipelineConfig pipe_cfg;
+  std::string pipe_config_file = !isSubcommand(argc, argv, "record") ? preScan(argc, argv, "--config") : "";
+  std::string histogram = "local", solver = "icm";
+  fs::path recon_input, recon_out;
+  bool recon_force = false;
+  recon->add_option("--input", recon_input, "dataset directory (from 'terrain record')")->required();
+  recon->add_option("--out", recon_out, "output directory")->required();
+  recon->add_flag("--force", recon_force, "write into an existing, non-empty directory");
+
+  // terrain run
+  CLI::App* run = app.add_subcommand("run", "generate a scene, simulate the rig and reconstruct, streaming (no dataset on disk)");
+  std::string run_scenario = "urban";
+  std::uint64_t run_seed = 1;
+  int run_frames = 60;
+  fs::path run_out = "out/run";
+  bool run_force = false;
+  sim::SimConfig run_sim;
+  std::string sim_config_file = isSubcommand(argc, argv, "run") ? preScan(argc, argv, "--sim-config") : "";
+  run->add_option("--scenario", run_scenario, "terrain type of the generated scene")->capture_default_str()->check(CLI::IsMember(scenes::sceneTypes()));
+  run->add_option("--seed", run_seed, "scene seed (the sensor noise seed is --noise-seed)")->capture_default_str();
+  run->add_option("--frames", run_frames, "lidar sweeps to simulate")->capture_default_str();
+  run->add_option("--out", run_out, "output directory")->capture_default_str();
+  run->add_flag("--force", run_force, "write into an existing, non-empty directory");
+  try {
+    if (!config_file.empty()) sim::loadSimConfig(config_file, sim_cfg);
+    if (!pipe_config_file.empty()) app::loadPipelineConfig(pipe_config_file, pipe_cfg);
+    if (!sim_config_file.empty()) sim::loadSimConfig(sim_config_file, run_sim);
+  } catch (const io::InputError& e) {
+    std::cerr << "terrain: error: " << e.what() << "\n";
+    return 2;
+  }
+  addPipelineOptions(*recon, pipe_cfg, pipe_config_file, histogram, solver);
+  addPipelineOptions(*run, pipe_cfg, pipe_config_file, histogram, solver);
+  run->add_option("--noise-seed", run_sim.seed, "sensor noise seed")->capture_default_str();
+  run->add_option("--sim-config", sim_config_file, "YAML file with simulation settings (as for 'terrain record --config')");
+  run->add_option("--speed", run_sim.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
+  run->add_option("--height-cap", run_sim.lidar.height_cap, "lidar returns higher than this above the sensor are dropped [m]")
+      ->capture_default_str();
+  run->add_option("--threads", run_sim.threads, "lidar simulation threads, 0 = all cores")->capture_default_str();
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
     if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg);
+    if (recon->parsed()) {
+      applyChoices(pipe_cfg, histogram, solver);
+      rig::DatasetSource source(recon_input);
+      io::prepareOutputDir(recon_out, recon_force);
+      reconstruct(source, pipe_cfg, recon_out);
+      return 0;
+    }
+    if (run->parsed()) {
+      applyChoices(pipe_cfg, histogram, solver);
+      io::prepareOutputDir(run_out, run_force);
+      scenes::SceneConfig scene_cfg_run;
+      scene_cfg_run.type = run_scenario;
+      scene_cfg_run.seed = run_seed;
+      const fs::path scene_path = run_out / "scene" / (run_scenario + "_" + std::to_string(run_seed) + ".xml");
+      scenes::writeScene(scenes::generateScene(scene_cfg_run), scene_path, run_force);
+      auto world = std::make_shared<sim::World>(scene_path);
+      sim::SimulatedRig rig(world, run_sim, run_frames);
+      reconstruct(rig, pipe_cfg, run_out);
+      return 0;
+    }
   } catch (const io::InputError& e) {
     std::cerr << "terrain: error: " << e.what() << "\n";
     return 2;

@@ -1,0 +1,223 @@
+#include "app/outputs.hpp"
+
+#include "rig/file_io.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace terrain::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void writePng(const fs::path& path, const cv::Mat& image) {
+  std::vector<uchar> buf;
+  if (!cv::imencode(".png", image, buf)) throw io::InputError(path.string() + ": PNG encoding failed");
+  io::writeFileAtomic(path, std::string(buf.begin(), buf.end()), true);
+}
+
+// vertex colour: the top voxel's camera colour, or yellow where the camera never saw it (paper Fig. 1c)
+std::array<std::uint8_t, 3> vertexColour(const Pipeline& p, const MeshVertex& m) {
+  const Voxel& v = p.map().voxels()[m.top_voxel];
+  if (v.coloured) return {v.r, v.g, v.b};
+  return {255, 220, 0};
+}
+
+template <typename T>
+void append(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+void writePly(const fs::path& path, const Pipeline& p) {
+  const auto& verts = p.mesh().vertices();
+  const auto tris = p.mesh().triangles();
+  const double cell = p.map().voxelSize();
+  std::ostringstream h;
+  h << "ply\nformat binary_little_endian 1.0\ncomment terrain reconstruction, world ENU [m]; unseen = never in a camera image\n"
+    << "element vertex " << verts.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
+    << "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar unseen\nproperty uchar recovered\n"
+    << "element face " << tris.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string s = h.str();
+  for (const auto& m : verts) {
+    append(s, static_cast<float>((m.cell.x() + 0.5) * cell));
+    append(s, static_cast<float>((m.cell.y() + 0.5) * cell));
+    append(s, m.height());
+    const auto c = vertexColour(p, m);
+    s.append(reinterpret_cast<const char*>(c.data()), 3);
+    append(s, static_cast<std::uint8_t>(!p.map().voxels()[m.top_voxel].coloured));
+    append(s, static_cast<std::uint8_t>(!m.estimates.empty()));
+  }
+  for (const auto& t : tris) {
+    append(s, static_cast<std::uint8_t>(3));
+    for (auto i : t) append(s, static_cast<std::int32_t>(i));
+  }
+  io::writeFileAtomic(path, s, true);
+}
+
+// grid covering the mesh: cell bounds and the vertex per grid position
+struct Grid {
+  int x0 = 0, y0 = 0, width = 0, height = 0;
+};
+
+Grid gridOf(const TerrainMesh& mesh) {
+  Grid g;
+  if (mesh.vertices().empty()) return g;
+  const CellIndex first = mesh.vertices().front().cell;
+  int x1 = first.x(), y1 = first.y();
+  g.x0 = x1, g.y0 = y1;
+  for (const auto& m : mesh.vertices()) {
+    g.x0 = std::min(g.x0, m.cell.x()), g.y0 = std::min(g.y0, m.cell.y());
+    x1 = std::max(x1, m.cell.x()), y1 = std::max(y1, m.cell.y());
+  }
+  g.width = x1 - g.x0 + 1;
+  g.height = y1 - g.y0 + 1;
+  return g;
+}
+
+void writeObj(const fs::path& dir, const Pipeline& p) {
+  const auto& verts = p.mesh().vertices();
+  const auto tris = p.mesh().triangles();
+  const double cell = p.map().voxelSize();
+  const Grid g = gridOf(p.mesh());
+  // texture: one texel per cell, north up
+  cv::Mat tex(std::max(1, g.height), std::max(1, g.width), CV_8UC3, cv::Scalar(0, 220, 255));
+  std::ostringstream obj;
+  obj << "# terrain reconstruction, world ENU [m]\nmtllib mesh.mtl\nusemtl terrain\n";
+  char line[128];
+  for (const auto& m : verts) {
+    std::snprintf(line, sizeof line, "v %.3f %.3f %.3f\n", (m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell,
+                  m.height());
+    obj << line;
+    const int col = m.cell.x() - g.x0, row = g.height - 1 - (m.cell.y() - g.y0);
+    const auto c = vertexColour(p, m);
+    tex.at<cv::Vec3b>(row, col) = cv::Vec3b(c[2], c[1], c[0]);
+  }
+  for (const auto& m : verts) {
+    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", (m.cell.x() - g.x0 + 0.5) / std::max(1, g.width),
+                  (m.cell.y() - g.y0 + 0.5) / std::max(1, g.height));
+    obj << line;
+  }
+  for (const auto& t : tris) obj << "f " << t[0] + 1 << '/' << t[0] + 1 << ' ' << t[1] + 1 << '/' << t[1] + 1 << ' ' << t[2] + 1 << '/' << t[2] + 1 << '\n';
+  io::writeFileAtomic(dir / "mesh.obj", obj.str(), true);
+  io::writeFileAtomic(dir / "mesh.mtl", "newmtl terrain\nKa 1 1 1\nKd 1 1 1\nmap_Kd mesh_texture.png\n", true);
+  writePng(dir / "mesh_texture.png", tex);
+}
+
+void writeVoxelPcd(const fs::path& path, const Pipeline& p) {
+  const auto& voxels = p.map().voxels();
+  std::ostringstream h;
+  h << "# .PCD v0.7 - labelled voxel map: label 1 ground, 2 non-ground, 0 unknown; rough 1 = in G1\nVERSION 0.7\n"
+    << "FIELDS x y z rgb hits label rough\nSIZE 4 4 4 4 4 1 1\nTYPE F F F U U U U\nCOUNT 1 1 1 1 1 1 1\nWIDTH "
+    << voxels.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << voxels.size() << "\nDATA binary\n";
+  std::string s = h.str();
+  const auto& rough = p.segmentation().rough;
+  for (std::size_t i = 0; i < voxels.size(); ++i) {
+    const Voxel& v = voxels[i];
+    append(s, static_cast<float>((v.index.x() + 0.5) * p.map().voxelSize()));
+    append(s, static_cast<float>((v.index.y() + 0.5) * p.map().voxelSize()));
+    append(s, v.height);
+    const std::uint32_t rgb = v.coloured ? (std::uint32_t{v.r} << 16 | std::uint32_t{v.g} << 8 | v.b) : 0xffdc00u;
+    append(s, rgb);
+    append(s, v.hits);
+    append(s, static_cast<std::uint8_t>(v.label));
+    append(s, static_cast<std::uint8_t>(i < rough.size() ? rough[i] : 0));
+  }
+  io::writeFileAtomic(path, s, true);
+}
+
+void writeTiming(const fs::path& dir, const Pipeline& p) {
+  std::ostringstream csv;
+  csv << "frame,points,new_voxels,voxels,pose_ms,voxel_ms,mesh_ms,segmentation_ms,boundary_ms,estimation_ms,total_ms,"
+         "estimated_vertices\n";
+  for (const auto& r : p.records()) {
+    csv << r.frame << ',' << r.points << ',' << r.new_voxels << ',' << r.voxels << ',' << r.pose_ms << ',' << r.voxel_ms
+        << ',' << r.mesh_ms << ',' << r.segmentation_ms << ',' << r.boundary_ms << ',' << r.estimation_ms << ','
+        << r.total_ms << ',' << r.estimated_vertices << '\n';
+  }
+  io::writeFileAtomic(dir / "timing.csv", csv.str(), true);
+}
+
+}  // namespace
+
+cv::Mat renderHeightMap(const cv::Mat& heights, double lo, double hi, const std::string& title) {
+  const int scale = std::max(1, 800 / std::max(1, std::max(heights.cols, heights.rows)));
+  cv::Mat grey(heights.rows, heights.cols, CV_8UC1), mask(heights.rows, heights.cols, CV_8UC1);
+  for (int r = 0; r < heights.rows; ++r) {
+    for (int c = 0; c < heights.cols; ++c) {
+      const float h = heights.at<float>(r, c);
+      mask.at<std::uint8_t>(r, c) = std::isfinite(h) ? 255 : 0;
+      grey.at<std::uint8_t>(r, c) =
+          static_cast<std::uint8_t>(std::clamp((h - lo) / std::max(1e-6, hi - lo), 0.0, 1.0) * 255.0);
+    }
+  }
+  cv::Mat coloured;
+  cv::applyColorMap(grey, coloured, cv::COLORMAP_JET);
+  coloured.setTo(cv::Scalar(255, 255, 255), mask == 0);
+  cv::resize(coloured, coloured, cv::Size(), scale, scale, cv::INTER_NEAREST);
+  // canvas with a title and a scale bar on the right
+  const int bar_w = 30, margin = 90, top = 40;
+  cv::Mat canvas(coloured.rows + top + 20, coloured.cols + margin + bar_w, CV_8UC3, cv::Scalar(255, 255, 255));
+  coloured.copyTo(canvas(cv::Rect(10, top, coloured.cols, coloured.rows)));
+  cv::putText(canvas, title, cv::Point(10, 28), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(0, 0, 0), 2);
+  const int bx = coloured.cols + 30, bh = coloured.rows;
+  for (int y = 0; y < bh; ++y) {
+    cv::Mat px(1, 1, CV_8UC1, cv::Scalar(255 - y * 255 / std::max(1, bh - 1)));
+    cv::Mat c;
+    cv::applyColorMap(px, c, cv::COLORMAP_JET);
+    cv::line(canvas, {bx, top + y}, {bx + bar_w, top + y}, cv::Scalar(c.at<cv::Vec3b>(0, 0)), 1);
+  }
+  for (int k = 0; k <= 4; ++k) {
+    const int y = top + (bh - 1) * k / 4;
+    char label[32];
+    std::snprintf(label, sizeof label, "%.1f m", hi - (hi - lo) * k / 4.0);
+    cv::putText(canvas, label, cv::Point(bx + bar_w + 4, y + 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1);
+  }
+  return canvas;
+}
+
+void writeBoundaryImages(const fs::path& dir, int frame, const BoundaryImages& images, const cv::Mat& rgb) {
+  char name[64];
+  std::snprintf(name, sizeof name, "%06d", frame);
+  // black boundary on white, as in the paper's Figure 7
+  writePng(dir / (std::string(name) + "_raw.png"), 255 - images.raw);
+  writePng(dir / (std::string(name) + "_cleaned.png"), 255 - images.cleaned);
+  if (!rgb.empty()) {
+    cv::Mat bgr;
+    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+    bgr.setTo(cv::Scalar(0, 0, 255), images.cleaned);
+    writePng(dir / (std::string(name) + "_overlay.png"), bgr);
+  }
+}
+
+void writeReconstruction(const fs::path& dir, const Pipeline& p) {
+  writePly(dir / "mesh.ply", p);
+  writeObj(dir, p);
+  writeVoxelPcd(dir / "voxels.pcd", p);
+  writeTiming(dir, p);
+  // height maps before and after recovery, on one colour scale
+  const Grid g = gridOf(p.mesh());
+  if (g.width > 0) {
+    cv::Mat before(g.height, g.width, CV_32FC1, cv::Scalar(std::nanf(""))), after = before.clone();
+    double lo = 1e9, hi = -1e9;
+    for (const auto& m : p.mesh().vertices()) {
+      const int col = m.cell.x() - g.x0, row = g.height - 1 - (m.cell.y() - g.y0);
+      before.at<float>(row, col) = m.sensed_height;
+      after.at<float>(row, col) = m.height();
+      lo = std::min(lo, static_cast<double>(m.sensed_height));
+      hi = std::max(hi, static_cast<double>(m.height()));
+    }
+    writePng(dir / "height_before.png", renderHeightMap(before, lo, hi, "height, sensed only (north up)"));
+    writePng(dir / "height_after.png", renderHeightMap(after, lo, hi, "height after 3D boundary estimation"));
+  }
+  nlohmann::json w = p.warnings();
+  io::writeFileAtomic(dir / "warnings.json", w.dump(1) + "\n", true);
+}
+
+}  // namespace terrain::app

@@ -1,0 +1,22 @@
+#pragma once
+// Files written from a finished reconstruction: the textured mesh (PLY with vertex colours; OBJ +
+// MTL + PNG texture), the labelled voxel map (PCD), height maps before and after recovery
+// (colour-mapped PNG with a scale bar), boundary images and per-frame timing.
+
+#include "core/pipeline.hpp"
+
+#include <filesystem>
+
+namespace terrain::app {
+
+// Writes everything into dir (which exists). Files are written whole or not at all.
+void writeReconstruction(const std::filesystem::path& dir, const Pipeline& pipeline);
+
+// Writes the boundary images of one frame (raw and cleaned) next to the camera image.
+void writeBoundaryImages(const std::filesystem::path& dir, int frame, const BoundaryImages& images,
+                         const cv::Mat& rgb);
+
+// Colour-mapped height map of a grid of heights (NaN = empty), with a scale bar from lo to hi.
+cv::Mat renderHeightMap(const cv::Mat& heights, double lo, double hi, const std::string& title);
+
+}  // namespace terrain::app

@@ -1,0 +1,144 @@
+#include "app/pipeline_config_io.hpp"
+
+#include "rig/file_io.hpp"
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace terrain::app {
+
+namespace {
+
+using Setter = std::function<void(const YAML::Node&)>;
+
+std::map<std::string, Setter> fields(PipelineConfig& c) {
+  auto num = [](double& f) { return Setter([&f](const YAML::Node& n) { f = n.as<double>(); }); };
+  auto integer = [](int& f) { return Setter([&f](const YAML::Node& n) { f = n.as<int>(); }); };
+  return {
+      {"segment_every", integer(c.segment_every)},
+      {"pose.heading_baseline", num(c.pose.heading_baseline)},
+      {"pose.level_min_range", num(c.pose.level_min_range)},
+      {"pose.level_max_range", num(c.pose.level_max_range)},
+      {"voxel_map.voxel_size", num(c.voxel_map.voxel_size)},
+      {"ground.histogram",
+       [&c](const YAML::Node& n) {
+         if (!parseHistogram(n.as<std::string>(), c.ground.histogram)) throw YAML::Exception(n.Mark(), "expected global or local");
+       }},
+      {"ground.solver",
+       [&c](const YAML::Node& n) {
+         if (!parseSolver(n.as<std::string>(), c.ground.solver)) throw YAML::Exception(n.Mark(), "expected icm or mincut");
+       }},
+      {"ground.bin_size", num(c.ground.bin_size)},
+      {"ground.delta", num(c.ground.delta)},
+      {"ground.range_margin", num(c.ground.range_margin)},
+      {"ground.tile_size", num(c.ground.tile_size)},
+      {"ground.tile_radius", integer(c.ground.tile_radius)},
+      {"ground.alpha", num(c.ground.alpha)},
+      {"ground.beta", num(c.ground.beta)},
+      {"ground.gamma", num(c.ground.gamma)},
+      {"ground.icm_iterations", integer(c.ground.icm_iterations)},
+      {"ground.threads", integer(c.ground.threads)},
+      {"boundary.a", num(c.boundary.a)},
+      {"boundary.b", num(c.boundary.b)},
+      {"boundary.kx", num(c.boundary.kx)},
+      {"boundary.ky", num(c.boundary.ky)},
+      {"boundary.threshold", num(c.boundary.threshold)},
+      {"boundary.erode_width", integer(c.boundary.erode_width)},
+      {"boundary.erode_height", integer(c.boundary.erode_height)},
+      {"boundary.dilate_width", integer(c.boundary.dilate_width)},
+      {"boundary.dilate_height", integer(c.boundary.dilate_height)},
+      {"estimation.max_distance", num(c.estimation.max_distance)},
+      {"estimation.max_height", num(c.estimation.max_height)},
+      {"estimation.top_margin", integer(c.estimation.top_margin)},
+  };
+}
+
+void require(bool ok, const std::string& field, double value, const std::string& range) {
+  if (!ok) {
+    std::ostringstream s;
+    s << field << " = " << value << " is out of range (allowed: " << range << ")";
+    throw io::InputError(s.str());
+  }
+}
+
+}  // namespace
+
+void validate(const PipelineConfig& c) {
+  require(c.voxel_map.voxel_size >= 0.02 && c.voxel_map.voxel_size <= 5, "voxel_map.voxel_size", c.voxel_map.voxel_size, "[0.02, 5] m");
+  require(c.segment_every >= 1, "segment_every", c.segment_every, ">= 1");
+  require(c.pose.heading_baseline > 0 && c.pose.heading_baseline <= 100, "pose.heading_baseline", c.pose.heading_baseline, "(0, 100] m");
+  require(c.ground.bin_size > 0 && c.ground.bin_size <= 5, "ground.bin_size", c.ground.bin_size, "(0, 5] m");
+  require(c.ground.delta > 0 && c.ground.delta <= 10, "ground.delta", c.ground.delta, "(0, 10] m");
+  require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin, "(0, 20] m");
+  require(c.ground.tile_size >= 1 && c.ground.tile_size <= 1000, "ground.tile_size", c.ground.tile_size, "[1, 1000] m");
+  require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius, "[0, 10]");
+  require(c.ground.alpha > 0, "ground.alpha", c.ground.alpha, "> 0");
+  require(c.ground.beta > 0, "ground.beta", c.ground.beta, "> 0");
+  require(c.ground.gamma > 0, "ground.gamma", c.ground.gamma, "> 0");
+  require(c.ground.icm_iterations >= 1 && c.ground.icm_iterations <= 1000, "ground.icm_iterations", c.ground.icm_iterations, "[1, 1000]");
+  require(c.boundary.a != 0, "boundary.a", c.boundary.a, "non-zero");
+  require(c.boundary.b != 0, "boundary.b", c.boundary.b, "non-zero");
+  require(c.boundary.kx > 0 && c.boundary.kx < c.boundary.ky, "boundary.kx", c.boundary.kx, "(0, ky)");
+  require(c.boundary.threshold > 0, "boundary.threshold", c.boundary.threshold, "> 0");
+  for (int v : {c.boundary.erode_width, c.boundary.erode_height, c.boundary.dilate_width, c.boundary.dilate_height}) {
+    require(v >= 1 && v <= 15, "boundary mask size", v, "[1, 15] px");
+  }
+  require(c.estimation.max_distance > 0, "estimation.max_distance", c.estimation.max_distance, "> 0 m");
+  require(c.estimation.max_height > 0, "estimation.max_height", c.estimation.max_height, "> 0 m");
+}
+
+void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(io::readFile(path));
+  } catch (const YAML::Exception& e) {
+    throw io::InputError(path.string() + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+  if (root.IsNull()) return;
+  if (!root.IsMap()) throw io::InputError(path.string() + ": expected a map of sections (pose, voxel_map, ground, boundary, estimation)");
+  const auto setters = fields(c);
+  auto apply = [&](const std::string& key, const YAML::Node& value) {
+    auto it = setters.find(key);
+    if (it == setters.end()) {
+      throw io::InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": unknown setting '" + key + "'");
+    }
+    try {
+      it->second(value);
+    } catch (const YAML::Exception& e) {
+      throw io::InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key + "' has a bad value (" + e.msg + ")");
+    }
+  };
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (kv.second.IsMap()) {
+      for (const auto& inner : kv.second) apply(key + "." + inner.first.as<std::string>(), inner.second);
+    } else {
+      apply(key, kv.second);
+    }
+  }
+}
+
+std::string pipelineConfigToJson(const PipelineConfig& c) {
+  nlohmann::json j;
+  j["segment_every"] = c.segment_every;
+  j["pose"] = {{"heading_baseline", c.pose.heading_baseline}, {"level_min_range", c.pose.level_min_range},
+               {"level_max_range", c.pose.level_max_range}};
+  j["voxel_map"] = {{"voxel_size", c.voxel_map.voxel_size}};
+  j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
+                 {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
+                 {"bin_size", c.ground.bin_size}, {"delta", c.ground.delta}, {"range_margin", c.ground.range_margin},
+                 {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius}, {"alpha", c.ground.alpha},
+                 {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations}};
+  j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},
+                   {"threshold", c.boundary.threshold}, {"erode", {c.boundary.erode_width, c.boundary.erode_height}},
+                   {"dilate", {c.boundary.dilate_width, c.boundary.dilate_height}}};
+  j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
+                     {"top_margin", c.estimation.top_margin}};
+  return j.dump();
+}
+
+}  // namespace terrain::app

@@ -1,0 +1,21 @@
+#pragma once
+// The pipeline configuration from YAML (sections pose, voxel_map, ground, boundary, estimation,
+// plus segment_every) and as JSON for reports.
+
+#include "core/pipeline.hpp"
+
+#include <filesystem>
+#include <string>
+
+namespace terrain::app {
+
+// Overlays the keys present in the file onto config. Throws io::InputError naming the file, line
+// and key for unknown keys, bad values and values out of range.
+void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& config);
+
+// Throws io::InputError naming the first field outside its range.
+void validate(const PipelineConfig& config);
+
+std::string pipelineConfigToJson(const PipelineConfig& config);
+
+}  // namespace terrain::app

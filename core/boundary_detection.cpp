@@ -1,0 +1,43 @@
+#include "core/boundary_detection.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <stdexcept>
+
+namespace terrain {
+
+BoundaryImages detectBoundaries(const cv::Mat& image, const BoundaryDetectionConfig& c) {
+  if (image.empty()) throw std::invalid_argument("boundary detection: empty image");
+  cv::Mat grey;
+  if (image.type() == CV_8UC3) {
+    cv::cvtColor(image, grey, cv::COLOR_RGB2GRAY);
+  } else if (image.type() == CV_8UC1) {
+    grey = image;
+  } else {
+    throw std::invalid_argument("boundary detection: expected an 8-bit RGB or grey image");
+  }
+  cv::Mat p;
+  grey.convertTo(p, CV_32F);
+  // Figure 6, with image rows growing downwards: Lx = right column - left column,
+  // Ly = row above - row below (Eqs. 2 and 3)
+  const cv::Mat horizontal = (cv::Mat_<float>(3, 3) << -c.a, 0, c.a, -c.b, 0, c.b, -c.a, 0, c.a);
+  const cv::Mat vertical = (cv::Mat_<float>(3, 3) << c.a, c.b, c.a, 0, 0, 0, -c.a, -c.b, -c.a);
+  cv::Mat lx, ly;
+  cv::filter2D(p, lx, CV_32F, horizontal, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+  cv::filter2D(p, ly, CV_32F, vertical, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+  BoundaryImages out;
+  cv::Mat lx2, ly2;
+  cv::multiply(lx, lx, lx2, c.kx);
+  cv::multiply(ly, ly, ly2, c.ky);
+  cv::sqrt(lx2 + ly2, out.magnitude);
+  out.raw = out.magnitude > c.threshold;
+  // erosion drops isolated responses, dilation restores the boundaries that survive
+  const cv::Mat erode_mask = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(c.erode_width, c.erode_height));
+  const cv::Mat dilate_mask = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(c.dilate_width, c.dilate_height));
+  cv::Mat eroded;
+  cv::erode(out.raw, eroded, erode_mask);
+  cv::dilate(eroded, out.cleaned, dilate_mask);
+  return out;
+}
+
+}  // namespace terrain

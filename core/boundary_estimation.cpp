@@ -1,0 +1,43 @@
+#include "core/boundary_estimation.hpp"
+
+#include "core/camera_model.hpp"
+
+#include <cmath>
+
+namespace terrain {
+
+BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
+                                           const CameraIntrinsics& k, const Pose& world_from_camera,
+                                           const BoundaryEstimationConfig& cfg) {
+  BoundaryEstimationStats stats;
+  if (boundary.empty() || boundary.type() != CV_8UC1) return stats;
+  const Pose camera_from_world = world_from_camera.inverse();
+  const Point3 centre = world_from_camera.translation();
+  const double cell = map.voxelSize();
+  auto& vertices = mesh.vertices();
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    MeshVertex& m = vertices[i];
+    if (map.voxels()[m.top_voxel].label != VoxelLabel::NonGround) continue;
+    const double x = (m.cell.x() + 0.5) * cell, y = (m.cell.y() + 0.5) * cell;
+    const Point3 world(x, y, m.sensed_height);
+    if ((world - centre).head<2>().norm() > cfg.max_distance) continue;
+    const auto px = project(k, camera_from_world * world);
+    if (!px) continue;
+    ++stats.projected;
+    // the object's top: the topmost boundary pixel in the column above the vertex
+    const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
+    int top = -1;
+    for (int row = v; row >= 0; --row) {
+      if (boundary.at<std::uint8_t>(row, u)) top = row;
+    }
+    if (top < 0 || top <= cfg.top_margin) continue;
+    const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
+    const double h = heightAbove(centre, dir, x, y);
+    if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
+    mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates);
+    ++stats.estimated;
+  }
+  return stats;
+}
+
+}  // namespace terrain

@@ -1,0 +1,81 @@
+#pragma once
+// Stage 4, ground segmentation (paper Sec. 3 and Appendix).
+//
+// Height histogram (Eq. 1): the peak gives the ground height h1; voxels within +-delta of it form
+// G1 (towards ground), the rest G2. The paper's single global histogram fails on slopes and rough
+// ground, so the default is local: the map is cut into tiles; in each tile (with its neighbours) a
+// plane is fitted to the lowest voxel of every column, and the histogram is taken of heights above
+// that plane, so h1 follows the terrain. The global variant stays selectable.
+//
+// Gibbs-Markov random field (Eqs. 9-22) over the voxels, neighbours at L1 distance 1:
+//   V1(f_v)        = -alpha if f_v agrees with v's rough class (G1 ground, G2 non-ground), else +alpha
+//   V1(h_v | f_v)  = -alpha if h_v lies in R(f_v), else +alpha; R(ground) = [h1 - range_margin,
+//                    h1 + range_margin], R(non-ground) its complement
+//   V2 + V2(h)     = -(beta + gamma e^{-|h_v - h_v'|}) if f_v = f_v', else +(beta + gamma e^{-|h_v - h_v'|})
+// Solvers: iterated conditional modes (red-black order, so it runs in parallel and gives the same
+// labels whatever the thread count), and the exact minimum by s-t min-cut (the energy is binary
+// and submodular).
+
+#include "core/voxel_map.hpp"
+
+#include <string>
+#include <vector>
+
+namespace terrain {
+
+struct GroundSegmentationConfig {
+  enum class Histogram { Global, Local };
+  enum class Solver { Icm, MinCut };
+  Histogram histogram = Histogram::Local;
+  Solver solver = Solver::Icm;
+  double bin_size = 0.1;       // [m] histogram bin width
+  double delta = 0.3;          // [m] half-width of the ground band around h1 (rough class G1)
+  double range_margin = 0.5;   // [m] half-width of R(ground) around h1
+  double tile_size = 6.0;      // [m] local histogram tile edge
+  int tile_radius = 1;         // tiles on each side whose voxels join a tile's histogram
+  double alpha = 1.0;          // single-site weight
+  double beta = 0.6;           // pair-site Potts weight
+  double gamma = 0.6;          // pair-site height-contrast weight
+  int icm_iterations = 20;     // ICM sweeps at most
+  int threads = 0;             // 0: all cores
+};
+
+// Parses "global"/"local" and "icm"/"mincut"; false if unknown.
+bool parseHistogram(const std::string& s, GroundSegmentationConfig::Histogram& out);
+bool parseSolver(const std::string& s, GroundSegmentationConfig::Solver& out);
+
+// Height h1 [m] at the peak of a histogram of heights with bins of bin_size; NaN if empty. The
+// peak is refined to the mean of the heights in the peak bin and its two neighbours.
+double histogramPeak(const std::vector<double>& heights, double bin_size);
+
+// The binary energy of the GMRF: unary costs per voxel and label, weighted neighbour pairs.
+struct GmrfProblem {
+  std::vector<double> unary_ground, unary_nonground;  // per node: V1(f) + V1(h|f)
+  struct Edge {
+    std::uint32_t u, v;
+    double weight;  // beta + gamma e^{-|h_u - h_v|}
+  };
+  std::vector<Edge> edges;
+  std::vector<std::uint8_t> parity;  // red-black colour of each node (neighbours differ)
+};
+
+// Energy U(f|d) of a labelling (true = ground), Eq. 18.
+double gmrfEnergy(const GmrfProblem& problem, const std::vector<std::uint8_t>& ground);
+// ICM from an initial labelling; returns the sweeps used.
+int solveIcm(const GmrfProblem& problem, std::vector<std::uint8_t>& ground, int max_iterations, int threads);
+// Exact minimum by s-t min-cut.
+void solveMinCut(const GmrfProblem& problem, std::vector<std::uint8_t>& ground);
+
+struct SegmentationResult {
+  std::vector<std::uint8_t> rough;    // per voxel: 1 if in G1
+  std::vector<std::uint8_t> refined;  // per voxel: 1 if in G1'
+  std::vector<float> ground_height;   // per voxel: h1 at its position [m]
+  double energy_rough = 0, energy_refined = 0;
+  int iterations = 0;
+  int tiles = 0;                      // local histograms used (1 for global)
+};
+
+// Segments every voxel of the map and writes the refined labels into the voxels.
+SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& config);
+
+}  // namespace terrain

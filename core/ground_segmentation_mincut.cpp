@@ -1,0 +1,27 @@
+// The exact GMRF minimum by s-t min-cut, with the Boykov-Kolmogorov max-flow of libmaxflow (GPL-3).
+#include "core/ground_segmentation.hpp"
+
+#include <maxflow/graph.h>
+
+#include <algorithm>
+
+namespace terrain {
+
+void solveMinCut(const GmrfProblem& p, std::vector<std::uint8_t>& ground) {
+  using Graph = maxflow::Graph<double, double, double>;
+  const int n = static_cast<int>(ground.size());
+  Graph g(n, static_cast<int>(p.edges.size()));
+  g.add_node(n);
+  // source side = ground. A node on the source side cuts its sink link, so the sink capacity is
+  // the cost of "ground"; shifting both costs by their minimum keeps capacities non-negative.
+  for (int v = 0; v < n; ++v) {
+    const double m = std::min(p.unary_ground[v], p.unary_nonground[v]);
+    g.add_tweights(v, p.unary_nonground[v] - m, p.unary_ground[v] - m);
+  }
+  // a pair costs -w when equal and +w when different: 2w more when the cut separates it
+  for (const auto& e : p.edges) g.add_edge(static_cast<int>(e.u), static_cast<int>(e.v), 2 * e.weight, 2 * e.weight);
+  g.maxflow();
+  for (int v = 0; v < n; ++v) ground[v] = g.what_segment(v) == Graph::SOURCE ? 1 : 0;
+}
+
+}  // namespace terrain

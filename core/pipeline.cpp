@@ -1,0 +1,134 @@
+#include "core/pipeline.hpp"
+
+#include "core/camera_model.hpp"
+
+#include <chrono>
+#include <cmath>
+
+namespace terrain {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+}  // namespace
+
+Pipeline::Pipeline(const RigCalibration& calibration, const PipelineConfig& config)
+    : calibration_(calibration), config_(config), poses_(calibration, config.pose), map_(config.voxel_map) {}
+
+void Pipeline::warn(const std::string& message) {
+  if (warnings_.size() < 1000) warnings_.push_back(message);
+}
+
+void Pipeline::process(const SensorFrame& frame) {
+  const std::string id = "frame " + std::to_string(frame.index) + ": ";
+  if (frame.sweep.points.empty()) warn(id + "empty lidar sweep");
+  if (frame.gps.empty()) warn(id + "no GPS fix");
+  if (frame.gyro.empty()) warn(id + "no gyro samples");
+  if (!frame.image) warn(id + "no camera image");
+  const auto t0 = Clock::now();
+  poses_.add(frame);
+  const double pose_ms = msSince(t0);
+  held_.push_back(frame);
+  if (!poses_.ready()) return;
+  while (!held_.empty()) {
+    processReady(held_.front());
+    records_.back().pose_ms += pose_ms / std::max<std::size_t>(1, held_.size());
+    held_.pop_front();
+  }
+}
+
+void Pipeline::finish() {
+  if (!held_.empty()) {
+    warn("the robot never moved " + std::to_string(config_.pose.heading_baseline) +
+         " m: heading unknown, frames processed with heading 0 (east)");
+    while (!held_.empty()) {
+      processReady(held_.front());
+      held_.pop_front();
+    }
+  }
+  if (dirty_) {
+    segmentation_ = segmentGround(map_, config_.ground);
+    dirty_ = false;
+  }
+  if (!map_.voxels().empty()) {
+    std::size_t ground = 0;
+    for (auto g : segmentation_.refined) ground += g;
+    if (ground == 0) warn("no voxel was labelled ground");
+    if (ground == segmentation_.refined.size()) warn("every voxel was labelled ground: no objects");
+  }
+}
+
+void Pipeline::processReady(const SensorFrame& frame) {
+  const auto start = Clock::now();
+  FrameRecord rec;
+  rec.frame = frame.index;
+  const std::string id = "frame " + std::to_string(frame.index) + ": ";
+
+  // pose and de-skew
+  auto t = Clock::now();
+  int dropped = 0;
+  const std::vector<Point3> world = deskewToWorld(frame.sweep, poses_, calibration_.vehicle_from_lidar, &dropped);
+  if (dropped > 0) warn(id + std::to_string(dropped) + " lidar points with NaN or infinite values dropped");
+  rec.points = world.size();
+  // colour of each point from the image taken with the sweep
+  std::vector<std::array<std::uint8_t, 4>> colours;
+  const bool has_image = frame.image && !frame.image->rgb.empty() && frame.image->rgb.type() == CV_8UC3;
+  Pose world_from_camera = Pose::Identity();
+  if (has_image) {
+    world_from_camera = poses_.worldFromVehicle(frame.image->time) * calibration_.vehicle_from_camera;
+    const Pose camera_from_world = world_from_camera.inverse();
+    const cv::Mat& rgb = frame.image->rgb;
+    colours.resize(world.size(), {0, 0, 0, 0});
+    for (std::size_t i = 0; i < world.size(); ++i) {
+      const auto px = project(calibration_.camera, camera_from_world * world[i]);
+      if (!px || px->y() >= rgb.rows || px->x() >= rgb.cols) continue;
+      const auto& c = rgb.at<cv::Vec3b>(static_cast<int>(px->y()), static_cast<int>(px->x()));
+      colours[i] = {c[0], c[1], c[2], 1};
+    }
+  } else if (frame.image) {
+    warn(id + "camera image is empty or not 8-bit RGB: ignored");
+  }
+  rec.pose_ms = msSince(t);
+
+  // voxel map
+  t = Clock::now();
+  rec.new_voxels = map_.insert(world, static_cast<std::uint32_t>(frame.index), has_image ? &colours : nullptr);
+  rec.voxels = map_.size();
+  dirty_ = dirty_ || rec.new_voxels > 0;
+  rec.voxel_ms = msSince(t);
+
+  // terrain mesh
+  t = Clock::now();
+  mesh_.update(map_, map_.takeNewVoxels());
+  rec.mesh_ms = msSince(t);
+
+  // ground segmentation
+  t = Clock::now();
+  ++processed_;
+  if (dirty_ && processed_ % std::max(1, config_.segment_every) == 0) {
+    segmentation_ = segmentGround(map_, config_.ground);
+    dirty_ = false;
+  }
+  rec.segmentation_ms = msSince(t);
+
+  // 2D boundaries and 3D boundary estimation
+  if (has_image) {
+    t = Clock::now();
+    last_boundaries_ = detectBoundaries(frame.image->rgb, config_.boundary);
+    last_boundary_frame_ = frame.index;
+    rec.boundary_ms = msSince(t);
+    t = Clock::now();
+    const BoundaryEstimationStats stats = estimateBoundaries(mesh_, map_, last_boundaries_.cleaned, calibration_.camera,
+                                                             world_from_camera, config_.estimation);
+    rec.estimated_vertices = stats.estimated;
+    if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
+    rec.estimation_ms = msSince(t);
+  }
+  rec.total_ms = msSince(start);
+  records_.push_back(rec);
+}
+
+}  // namespace terrain

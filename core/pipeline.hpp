@@ -1,0 +1,77 @@
+#pragma once
+// The pipeline: pose -> voxel map -> terrain mesh -> ground segmentation -> 2D boundary detection
+// -> 3D boundary estimation, one sensor frame at a time. It reads only SensorFrame and the rig
+// calibration; it writes nothing and prints nothing: warnings and timings are kept for the caller.
+
+#include "core/boundary_detection.hpp"
+#include "core/boundary_estimation.hpp"
+#include "core/ground_segmentation.hpp"
+#include "core/pose_estimation.hpp"
+#include "core/sensor_data.hpp"
+#include "core/terrain_mesh.hpp"
+#include "core/voxel_map.hpp"
+
+#include <deque>
+#include <string>
+#include <vector>
+
+namespace terrain {
+
+struct PipelineConfig {
+  PoseConfig pose;
+  VoxelMapConfig voxel_map;
+  GroundSegmentationConfig ground;
+  BoundaryDetectionConfig boundary;
+  BoundaryEstimationConfig estimation;
+  int segment_every = 1;  // run ground segmentation every this many frames (and at the end)
+};
+
+// Per-frame record: stage times [ms] and sizes.
+struct FrameRecord {
+  int frame = 0;
+  double pose_ms = 0, voxel_ms = 0, mesh_ms = 0, segmentation_ms = 0, boundary_ms = 0, estimation_ms = 0, total_ms = 0;
+  std::size_t points = 0, new_voxels = 0, voxels = 0;
+  int estimated_vertices = 0;
+};
+
+class Pipeline {
+ public:
+  Pipeline(const RigCalibration& calibration, const PipelineConfig& config);
+
+  // Processes a frame. Until the initial attitude is known, frames are held back and processed
+  // as soon as it is.
+  void process(const SensorFrame& frame);
+  // Processes held-back frames (with the best pose available) and runs a final segmentation.
+  void finish();
+
+  const VoxelMap& map() const { return map_; }
+  const TerrainMesh& mesh() const { return mesh_; }
+  const SegmentationResult& segmentation() const { return segmentation_; }
+  const std::vector<FrameRecord>& records() const { return records_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+  const PoseEstimator& poses() const { return poses_; }
+  const RigCalibration& calibration() const { return calibration_; }
+  // the last frame's boundary images (empty if it had no image)
+  const BoundaryImages& lastBoundaries() const { return last_boundaries_; }
+  int lastBoundaryFrame() const { return last_boundary_frame_; }
+
+ private:
+  void processReady(const SensorFrame& frame);
+  void warn(const std::string& message);
+
+  RigCalibration calibration_;
+  PipelineConfig config_;
+  PoseEstimator poses_;
+  VoxelMap map_;
+  TerrainMesh mesh_;
+  SegmentationResult segmentation_;
+  std::deque<SensorFrame> held_;
+  std::vector<FrameRecord> records_;
+  std::vector<std::string> warnings_;
+  BoundaryImages last_boundaries_;
+  int last_boundary_frame_ = -1;
+  int processed_ = 0;
+  bool dirty_ = false;  // voxels added since the last segmentation
+};
+
+}  // namespace terrain

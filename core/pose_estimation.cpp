@@ -1,0 +1,157 @@
+#include "core/pose_estimation.hpp"
+
+#include <GeographicLib/LocalCartesian.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace terrain {
+
+PoseEstimator::PoseEstimator(const RigCalibration& calibration, const PoseConfig& config)
+    : calibration_(calibration), config_(config) {}
+
+Vector3 PoseEstimator::gpsToWorld(const GpsFix& f) const {
+  const GeographicLib::LocalCartesian enu(calibration_.origin.latitude_deg, calibration_.origin.longitude_deg,
+                                          calibration_.origin.altitude_m);
+  double x, y, z;
+  enu.Forward(f.latitude_deg, f.longitude_deg, f.altitude_m, x, y, z);
+  return {x, y, z};
+}
+
+// roll and pitch from a least-squares plane through the lowest lidar point of each cell near the
+// robot, with one round of outlier rejection
+void PoseEstimator::levelFromSweep(const LidarSweep& sweep) {
+  std::map<std::pair<int, int>, Point3> lowest;
+  for (const auto& p : sweep.points) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const double r = std::hypot(p.x, p.y);
+    if (r < config_.level_min_range || r > config_.level_max_range) continue;
+    const Point3 q = calibration_.vehicle_from_lidar * Point3(p.x, p.y, p.z);
+    const std::pair<int, int> key{static_cast<int>(std::floor(q.x() / config_.level_cell)),
+                                  static_cast<int>(std::floor(q.y() / config_.level_cell))};
+    auto it = lowest.find(key);
+    if (it == lowest.end() || q.z() < it->second.z()) lowest[key] = q;
+  }
+  std::vector<Point3> pts;
+  for (const auto& [key, p] : lowest) pts.push_back(p);
+  Eigen::Vector3d plane(0, 0, 0);  // z = a x + b y + c
+  for (int round = 0; round < 2 && pts.size() >= 3; ++round) {
+    Eigen::MatrixXd a(pts.size(), 3);
+    Eigen::VectorXd b(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      a.row(i) << pts[i].x(), pts[i].y(), 1.0;
+      b[i] = pts[i].z();
+    }
+    plane = a.colPivHouseholderQr().solve(b);
+    std::vector<Point3> kept;
+    for (const auto& p : pts) {
+      if (std::abs(plane[0] * p.x() + plane[1] * p.y() + plane[2] - p.z()) < 0.15) kept.push_back(p);
+    }
+    pts.swap(kept);
+  }
+  // the ground normal in the vehicle frame is the world up axis seen from the vehicle
+  const Vector3 up_in_vehicle = Vector3(-plane[0], -plane[1], 1.0).normalized();
+  level_ = Rotation::FromTwoVectors(up_in_vehicle, Vector3::UnitZ());
+  levelled_ = true;
+}
+
+void PoseEstimator::add(const SensorFrame& frame) {
+  if (!levelled_) levelFromSweep(frame.sweep);
+  // integrate the gyro: each sample is the mean rate over the preceding period
+  if (rotations_.empty()) {
+    const double t0 = frame.gyro.empty() ? frame.sweep.start_time : frame.gyro.front().time - calibration_.gyro_period;
+    rotations_.push_back({t0, level_});
+  }
+  for (const auto& g : frame.gyro) {
+    if (!g.rate.allFinite() || g.time <= rotations_.back().time) continue;
+    const double dt = g.time - rotations_.back().time;
+    const double angle = g.rate.norm() * dt;
+    const Rotation step = angle > 0 ? Rotation(Eigen::AngleAxisd(angle, g.rate.normalized())) : Rotation::Identity();
+    rotations_.push_back({g.time, (rotations_.back().world_from_vehicle * step).normalized()});
+  }
+  // GPS: antenna positions
+  for (const auto& f : frame.gps) {
+    if (!std::isfinite(f.latitude_deg) || !std::isfinite(f.longitude_deg) || !std::isfinite(f.altitude_m)) continue;
+    if (!antenna_.empty() && f.time <= antenna_.back().first) continue;
+    antenna_.emplace_back(f.time, gpsToWorld(f));
+  }
+  // heading: GPS course over the baseline against the integrated forward direction there
+  if (!heading_known_ && antenna_.size() >= 2) {
+    const Vector3 travel = antenna_.back().second - antenna_.front().second;
+    if (travel.head<2>().norm() >= config_.heading_baseline) {
+      // mean forward direction (yaw-free integration) over the same interval
+      Vector3 forward = Vector3::Zero();
+      for (const auto& r : rotations_) {
+        if (r.time >= antenna_.front().first && r.time <= antenna_.back().first) {
+          forward += r.world_from_vehicle * Vector3::UnitX();
+        }
+      }
+      if (forward.head<2>().norm() < 1e-9) forward = Vector3::UnitX();
+      yaw_offset_ = std::atan2(travel.y(), travel.x()) - std::atan2(forward.y(), forward.x());
+      heading_known_ = true;
+    }
+  }
+}
+
+Rotation PoseEstimator::rotationAt(double t) const {
+  const Rotation yaw(Eigen::AngleAxisd(yaw_offset_, Vector3::UnitZ()));
+  if (rotations_.empty()) return yaw * level_;
+  auto it = std::lower_bound(rotations_.begin(), rotations_.end(), t,
+                             [](const TimedRotation& r, double v) { return r.time < v; });
+  if (it == rotations_.begin()) return yaw * it->world_from_vehicle;
+  if (it == rotations_.end()) return yaw * rotations_.back().world_from_vehicle;
+  const TimedRotation& b = *it;
+  const TimedRotation& a = *(it - 1);
+  const double s = (t - a.time) / (b.time - a.time);
+  return yaw * a.world_from_vehicle.slerp(s, b.world_from_vehicle);
+}
+
+Vector3 PoseEstimator::antennaAt(double t) const {
+  if (antenna_.empty()) return Vector3::Zero();
+  auto it = std::lower_bound(antenna_.begin(), antenna_.end(), t,
+                             [](const std::pair<double, Vector3>& a, double v) { return a.first < v; });
+  if (it == antenna_.begin()) return it->second;
+  if (it == antenna_.end()) {
+    // past the last fix: extrapolate with the last velocity
+    if (antenna_.size() < 2) return antenna_.back().second;
+    const auto& a = antenna_[antenna_.size() - 2];
+    const auto& b = antenna_.back();
+    return b.second + (b.second - a.second) * (t - b.first) / (b.first - a.first);
+  }
+  const auto& b = *it;
+  const auto& a = *(it - 1);
+  return a.second + (b.second - a.second) * (t - a.first) / (b.first - a.first);
+}
+
+Pose PoseEstimator::worldFromVehicle(double t) const {
+  Pose p = Pose::Identity();
+  p.linear() = rotationAt(t).toRotationMatrix();
+  p.translation() = antennaAt(t) - p.linear() * calibration_.vehicle_from_gps.translation();
+  return p;
+}
+
+std::vector<Point3> deskewToWorld(const LidarSweep& sweep, const PoseEstimator& poses, const Pose& vehicle_from_lidar,
+                                  int* dropped) {
+  std::vector<Point3> out;
+  out.reserve(sweep.points.size());
+  int bad = 0;
+  // poses change slowly: evaluate once per distinct firing time
+  double last_time = std::numeric_limits<double>::quiet_NaN();
+  Pose world_from_lidar = Pose::Identity();
+  for (const auto& p : sweep.points) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(p.time)) {
+      ++bad;
+      continue;
+    }
+    if (p.time != last_time) {
+      world_from_lidar = poses.worldFromVehicle(p.time) * vehicle_from_lidar;
+      last_time = p.time;
+    }
+    out.push_back(world_from_lidar * Point3(p.x, p.y, p.z));
+  }
+  if (dropped) *dropped = bad;
+  return out;
+}
+
+}  // namespace terrain

@@ -1,0 +1,65 @@
+#include "core/terrain_mesh.hpp"
+
+#include <algorithm>
+
+namespace terrain {
+
+std::int64_t TerrainMesh::find(const CellIndex& cell) const {
+  auto it = index_.find(key(cell));
+  return it == index_.end() ? -1 : it->second;
+}
+
+void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& voxel_ids) {
+  const auto& voxels = map.voxels();
+  for (std::uint32_t id : voxel_ids) {
+    const Voxel& v = voxels[id];
+    const CellIndex cell(v.index.x(), v.index.y());
+    auto [it, inserted] = index_.try_emplace(key(cell), static_cast<std::uint32_t>(vertices_.size()));
+    if (inserted) {
+      MeshVertex m;
+      m.cell = cell;
+      m.top_voxel = id;
+      m.sensed_height = v.height;
+      vertices_.push_back(m);
+      continue;
+    }
+    MeshVertex& m = vertices_[it->second];
+    const Voxel& top = voxels[m.top_voxel];
+    if (id == m.top_voxel || v.index.z() > top.index.z()) {
+      m.top_voxel = id;
+      m.sensed_height = v.height;
+    }
+  }
+}
+
+void TerrainMesh::addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates) {
+  MeshVertex& m = vertices_[vertex];
+  if (m.estimates.size() >= max_estimates) m.estimates.erase(m.estimates.begin());
+  m.estimates.push_back(height);
+  std::vector<float> sorted = m.estimates;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  m.recovered_height = sorted[sorted.size() / 2];
+}
+
+std::vector<std::array<std::uint32_t, 3>> TerrainMesh::triangles() const {
+  std::vector<std::array<std::uint32_t, 3>> tris;
+  for (std::uint32_t i = 0; i < vertices_.size(); ++i) {
+    const CellIndex c = vertices_[i].cell;
+    const std::int64_t right = find({c.x() + 1, c.y()}), up = find({c.x(), c.y() + 1}),
+                       diag = find({c.x() + 1, c.y() + 1});
+    const auto u = [](std::int64_t v) { return static_cast<std::uint32_t>(v); };
+    if (right >= 0 && diag >= 0 && up >= 0) {
+      tris.push_back({i, u(right), u(diag)});
+      tris.push_back({i, u(diag), u(up)});
+    } else if (right >= 0 && diag >= 0) {
+      tris.push_back({i, u(right), u(diag)});
+    } else if (right >= 0 && up >= 0) {
+      tris.push_back({i, u(right), u(up)});
+    } else if (diag >= 0 && up >= 0) {
+      tris.push_back({i, u(diag), u(up)});
+    }
+  }
+  return tris;
+}
+
+}  // namespace terrain

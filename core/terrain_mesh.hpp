@@ -1,0 +1,51 @@
+#pragma once
+// Stage 3, terrain mesh: the top voxel of each horizontal cell becomes a vertex of a regular
+// triangle mesh. Vertices take their colour from the camera (through the top voxel's colour);
+// vertices never seen by the camera are flagged. The mesh also holds the heights recovered by 3D
+// boundary estimation (stage 6), fused over frames.
+
+#include "core/voxel_map.hpp"
+
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace terrain {
+
+struct MeshVertex {
+  CellIndex cell;
+  std::uint32_t top_voxel = 0;  // voxel id of the column's top
+  float sensed_height = 0;      // [m] height of the top voxel
+  std::vector<float> estimates; // [m] recovered-height estimates from the frames that saw the top
+  float recovered_height = 0;   // [m] fused estimate (median), valid when !estimates.empty()
+
+  float height() const { return estimates.empty() ? sensed_height : std::max(sensed_height, recovered_height); }
+};
+
+class TerrainMesh {
+ public:
+  // Updates the columns touched by the given voxels (new or changed).
+  void update(const VoxelMap& map, const std::vector<std::uint32_t>& voxel_ids);
+
+  const std::vector<MeshVertex>& vertices() const { return vertices_; }
+  std::vector<MeshVertex>& vertices() { return vertices_; }
+  // Vertex id of a cell, or -1.
+  std::int64_t find(const CellIndex& cell) const;
+  // Triangles over neighbouring cells (two per complete quad, one where a corner is missing),
+  // counter-clockwise seen from above.
+  std::vector<std::array<std::uint32_t, 3>> triangles() const;
+
+  // Adds a recovered-height estimate to a vertex; the fused value is the median of the last
+  // max_estimates estimates.
+  void addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates);
+
+ private:
+  static std::uint64_t key(const CellIndex& c) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
+  }
+  std::vector<MeshVertex> vertices_;
+  std::unordered_map<std::uint64_t, std::uint32_t> index_;
+};
+
+}  // namespace terrain

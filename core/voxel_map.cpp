@@ -1,0 +1,110 @@
+#include "core/voxel_map.hpp"
+
+#include <cmath>
+
+namespace terrain {
+
+namespace {
+
+constexpr int kBits = 21;  // per axis: +-1M voxels
+constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);
+constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
+
+std::uint64_t hashKey(std::uint64_t k) {
+  k ^= k >> 33;
+  k *= 0xff51afd7ed558ccdull;
+  k ^= k >> 33;
+  return k;
+}
+
+}  // namespace
+
+VoxelMap::VoxelMap(const VoxelMapConfig& config) : size_(config.voxel_size) {
+  keys_.assign(1 << 16, 0);
+  slots_.assign(1 << 16, 0);
+}
+
+std::uint64_t VoxelMap::pack(const VoxelIndex& i) {
+  return ((static_cast<std::uint64_t>(i.x() + kOffset) & kMask) << (2 * kBits)) |
+         ((static_cast<std::uint64_t>(i.y() + kOffset) & kMask) << kBits) |
+         (static_cast<std::uint64_t>(i.z() + kOffset) & kMask);
+}
+
+VoxelIndex VoxelMap::indexOf(const Point3& p) const {
+  return {static_cast<int>(std::floor(p.x() / size_)), static_cast<int>(std::floor(p.y() / size_)),
+          static_cast<int>(std::floor(p.z() / size_))};
+}
+
+Point3 VoxelMap::centreOf(const VoxelIndex& i) const { return (i.cast<double>().array() + 0.5) * size_; }
+
+std::int64_t VoxelMap::find(const VoxelIndex& index) const {
+  const std::uint64_t key = pack(index) + 1;
+  const std::size_t mask = keys_.size() - 1;
+  for (std::size_t s = hashKey(key) & mask;; s = (s + 1) & mask) {
+    if (keys_[s] == 0) return -1;
+    if (keys_[s] == key) return slots_[s];
+  }
+}
+
+void VoxelMap::grow() {
+  std::vector<std::uint64_t> keys(keys_.size() * 2, 0);
+  std::vector<std::uint32_t> slots(keys.size(), 0);
+  const std::size_t mask = keys.size() - 1;
+  for (std::size_t s = 0; s < keys_.size(); ++s) {
+    if (keys_[s] == 0) continue;
+    std::size_t t = hashKey(keys_[s]) & mask;
+    while (keys[t] != 0) t = (t + 1) & mask;
+    keys[t] = keys_[s];
+    slots[t] = slots_[s];
+  }
+  keys_.swap(keys);
+  slots_.swap(slots);
+}
+
+std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t frame,
+                             const std::vector<std::array<std::uint8_t, 4>>* colours) {
+  const std::size_t before = voxels_.size();
+  const double limit = static_cast<double>(kOffset - 1) * size_;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Point3& p = points[k];
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() >= limit) continue;
+    const VoxelIndex index = indexOf(p);
+    const std::uint64_t key = pack(index) + 1;
+    if (2 * (voxels_.size() + 1) > keys_.size()) grow();
+    const std::size_t mask = keys_.size() - 1;
+    std::size_t s = hashKey(key) & mask;
+    while (keys_[s] != 0 && keys_[s] != key) s = (s + 1) & mask;
+    if (keys_[s] == 0) {
+      keys_[s] = key;
+      slots_[s] = static_cast<std::uint32_t>(voxels_.size());
+      Voxel v;
+      v.index = index;
+      voxels_.push_back(v);
+      new_voxels_.push_back(slots_[s]);
+    }
+    Voxel& v = voxels_[slots_[s]];
+    // running mean of the points' heights
+    v.hits += 1;
+    v.height += static_cast<float>((p.z() - v.height) / v.hits);
+    v.frame = frame;
+    if (colours && (*colours)[k][3]) {
+      const auto& c = (*colours)[k];
+      v.r = c[0], v.g = c[1], v.b = c[2];
+      v.coloured = true;
+    }
+  }
+  return voxels_.size() - before;
+}
+
+std::vector<std::uint32_t> VoxelMap::takeNewVoxels() {
+  std::vector<std::uint32_t> out;
+  out.swap(new_voxels_);
+  return out;
+}
+
+std::size_t VoxelMap::memoryBytes() const {
+  return voxels_.capacity() * sizeof(Voxel) + keys_.capacity() * sizeof(std::uint64_t) +
+         slots_.capacity() * sizeof(std::uint32_t) + new_voxels_.capacity() * sizeof(std::uint32_t);
+}
+
+}  // namespace terrain

@@ -1,0 +1,67 @@
+#pragma once
+// Stage 2, voxel map: world points quantised into a regular grid, integrated frame by frame.
+// Sparse: only occupied voxels are stored, in an open-addressing hash table keyed by the packed
+// voxel index, so memory grows with the occupied voxels only. Each horizontal cell (column) keeps
+// its top voxel, for the terrain mesh.
+
+#include "core/types.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace terrain {
+
+struct VoxelMapConfig {
+  double voxel_size = 0.2;  // [m] edge of a voxel, in [0.02, 5]
+};
+
+enum class VoxelLabel : std::uint8_t { Unknown = 0, Ground = 1, NonGround = 2 };
+
+struct Voxel {
+  VoxelIndex index;           // grid index (x, y, z)
+  std::uint32_t hits = 0;     // points that fell in it
+  float height = 0;           // [m] mean world z of its points
+  std::uint8_t r = 0, g = 0, b = 0;  // colour, from the camera
+  bool coloured = false;
+  VoxelLabel label = VoxelLabel::Unknown;
+  std::uint32_t frame = 0;    // last frame that hit it
+};
+
+class VoxelMap {
+ public:
+  explicit VoxelMap(const VoxelMapConfig& config);
+
+  // Adds world points from frame `frame`; returns how many new voxels were created. colours, if
+  // given, has one entry per point: RGB and a last byte that is non-zero when the point was seen
+  // by the camera.
+  std::size_t insert(const std::vector<Point3>& points, std::uint32_t frame,
+                     const std::vector<std::array<std::uint8_t, 4>>* colours = nullptr);
+
+  // Voxel id of an index, or -1 if the voxel is empty.
+  std::int64_t find(const VoxelIndex& index) const;
+  const std::vector<Voxel>& voxels() const { return voxels_; }
+  std::vector<Voxel>& voxels() { return voxels_; }
+  std::size_t size() const { return voxels_.size(); }
+  // ids of voxels created since the last call
+  std::vector<std::uint32_t> takeNewVoxels();
+
+  double voxelSize() const { return size_; }
+  VoxelIndex indexOf(const Point3& p) const;
+  Point3 centreOf(const VoxelIndex& index) const;
+
+  // Bytes used by the map's own storage.
+  std::size_t memoryBytes() const;
+
+ private:
+  static std::uint64_t pack(const VoxelIndex& i);
+  void grow();
+
+  double size_;
+  std::vector<Voxel> voxels_;
+  std::vector<std::uint64_t> keys_;   // hash slots: packed index + 1 (0 = empty)
+  std::vector<std::uint32_t> slots_;  // voxel id per slot
+  std::vector<std::uint32_t> new_voxels_;
+};
+
+}  // namespace terrain
