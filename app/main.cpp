@@ -8,6 +8,7 @@
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
 #include "core/pipeline.hpp"
+#include "evaluation/scoring.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
 #include "scenes/scene_generator.hpp"
@@ -103,14 +104,66 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// sensing on its own thread, processing on this one; writes the outputs into out
-void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out) {
+nlohmann::json errorJson(const eval::ErrorStats& e) {
+  return {{"mae_m", e.mae}, {"rmse_m", e.rmse}, {"bias_m", e.bias}, {"variance_m2", e.variance}, {"cells", e.count}};
+}
+
+nlohmann::json binaryJson(const eval::BinaryScores& b) {
+  return {{"precision", b.precision}, {"recall", b.recall}, {"f1", b.f1}, {"iou", b.iou},
+          {"tp", b.tp}, {"fp", b.fp}, {"fn", b.fn}, {"tn", b.tn}};
+}
+
+// scores against the ground truth, printed as a scorecard and kept in report.json
+nlohmann::json scoreRun(const Pipeline& pipeline, const eval::VoxelTruth& truth, const sim::World& world,
+                        const std::vector<Point3>& path) {
+  nlohmann::json r;
+  const auto rough = eval::scoreVoxels(pipeline.map(), pipeline.segmentation().rough, truth);
+  const auto refined = eval::scoreVoxels(pipeline.map(), pipeline.segmentation().refined, truth);
+  const std::string solver = pipeline.segmentation().iterations > 0 ? "gmrf_icm" : "gmrf_mincut";
+  r["ground_segmentation"]["histogram"] = binaryJson(rough.scores);
+  r["ground_segmentation"][solver] = binaryJson(refined.scores);
+  r["ground_segmentation"]["unmatched_voxels"] = refined.unmatched;
+  const auto h = eval::scoreHeights(pipeline.mesh(), pipeline.map().voxelSize(), world, path);
+  r["height_recovery"]["before"] = errorJson(h.before);
+  r["height_recovery"]["after"] = errorJson(h.after);
+  r["height_recovery"]["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
+  r["height_recovery"]["raised_terrain_cells"] = h.raised_terrain_cells;
+  for (const auto& [band, e] : h.by_band) {
+    r["height_recovery"]["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  }
+  std::cout << std::setprecision(3) << "scorecard\n"
+            << "  ground segmentation per voxel   F1      IoU     precision recall\n"
+            << "    height histogram (G1)         " << rough.scores.f1 << "   " << rough.scores.iou << "   "
+            << rough.scores.precision << "     " << rough.scores.recall << "\n"
+            << "    GMRF (" << solver << ")" << std::string(std::max<int>(1, 18 - static_cast<int>(solver.size())), ' ')
+            << refined.scores.f1 << "   " << refined.scores.iou << "   " << refined.scores.precision << "     "
+            << refined.scores.recall << "\n"
+            << "  object heights over " << h.after.count << " cells   MAE [m]  RMSE [m]  bias [m]  variance [m2]\n"
+            << "    sensed only                   " << h.before.mae << "    " << h.before.rmse << "    " << h.before.bias
+            << "    " << h.before.variance << "\n"
+            << "    after boundary estimation     " << h.after.mae << "    " << h.after.rmse << "    " << h.after.bias
+            << "    " << h.after.variance << "\n"
+            << "  of which estimated: " << h.seen_after.count << " cells, MAE " << h.seen_before.mae << " -> "
+            << h.seen_after.mae << " m; terrain cells wrongly raised: " << h.raised_terrain_cells << "\n";
+  return r;
+}
+
+// sensing on its own thread, processing on this one; writes the outputs into out. With a world,
+// the ground truth the source carries is scored (it never reaches the pipeline).
+void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out,
+                 const sim::World* world) {
   Pipeline pipeline(source.calibration(), config);
+  eval::VoxelTruth voxel_truth(config.voxel_map.voxel_size);
+  std::vector<Point3> true_path;
   app::BoundedQueue<SensorFrame> queue(4);
   std::exception_ptr sensing_error;
   std::thread sensing([&] {
     try {
       while (auto f = source.next()) {
+        if (world && f->truth) {
+          voxel_truth.add(*f, source.calibration().vehicle_from_lidar);
+          for (const auto& p : f->truth->poses) true_path.push_back(p.world_from_vehicle.translation());
+        }
         if (!queue.push(std::move(f->sensors))) break;
       }
     } catch (...) {
@@ -158,7 +211,13 @@ void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const 
             << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
             << "per frame: median " << median(total) << " ms in all, " << median(seg) << " ms ground segmentation\n";
   for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
-  std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/ into "
+  nlohmann::json report;
+  report["frames"] = pipeline.records().size();
+  report["voxels"] = pipeline.map().size();
+  report["config"] = nlohmann::json::parse(app::pipelineConfigToJson(config));
+  if (world && voxel_truth.size() > 0) report.update(scoreRun(pipeline, voxel_truth, *world, true_path));
+  io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
+  std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json into "
             << fs::absolute(out).string() << "\n";
 }
 
@@ -286,7 +345,13 @@ int main(int argc, char** argv) {
       applyChoices(pipe_cfg, histogram, solver);
       rig::DatasetSource source(recon_input);
       io::prepareOutputDir(recon_out, recon_force);
-      reconstruct(source, pipe_cfg, recon_out);
+      // a dataset recorded from a scene still on disk can be scored against it
+      std::shared_ptr<sim::World> world;
+      const auto producer = nlohmann::json::parse(source.producerJson());
+      if (producer.contains("scene") && producer["scene"].is_string() && fs::exists(producer["scene"].get<std::string>())) {
+        world = std::make_shared<sim::World>(producer["scene"].get<std::string>());
+      }
+      reconstruct(source, pipe_cfg, recon_out, world.get());
       return 0;
     }
     if (run->parsed()) {
@@ -299,7 +364,7 @@ int main(int argc, char** argv) {
       scenes::writeScene(scenes::generateScene(scene_cfg_run), scene_path, run_force);
       auto world = std::make_shared<sim::World>(scene_path);
       sim::SimulatedRig rig(world, run_sim, run_frames);
-      reconstruct(rig, pipe_cfg, run_out);
+      reconstruct(rig, pipe_cfg, run_out, world.get());
       return 0;
     }
   } catch (const io::InputError& e) {

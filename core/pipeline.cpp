@@ -33,7 +33,8 @@ void Pipeline::process(const SensorFrame& frame) {
   const double pose_ms = msSince(t0);
   held_.push_back(frame);
   if (!poses_.ready()) return;
-  while (!held_.empty()) {
+  // a frame waits until the GPS fixes after it no longer change its poses
+  while (!held_.empty() && held_.front().sweep.end_time <= poses_.finalUntil()) {
     processReady(held_.front());
     records_.back().pose_ms += pose_ms / std::max<std::size_t>(1, held_.size());
     held_.pop_front();
@@ -42,8 +43,10 @@ void Pipeline::process(const SensorFrame& frame) {
 
 void Pipeline::finish() {
   if (!held_.empty()) {
-    warn("the robot never moved " + std::to_string(config_.pose.heading_baseline) +
-         " m: heading unknown, frames processed with heading 0 (east)");
+    if (!poses_.ready()) {
+      warn("the robot never moved " + std::to_string(config_.pose.heading_baseline) +
+           " m: heading unknown, frames processed with heading 0 (east)");
+    }
     while (!held_.empty()) {
       processReady(held_.front());
       held_.pop_front();

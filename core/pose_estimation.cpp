@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 namespace terrain {
@@ -70,12 +71,14 @@ void PoseEstimator::add(const SensorFrame& frame) {
     const Rotation step = angle > 0 ? Rotation(Eigen::AngleAxisd(angle, g.rate.normalized())) : Rotation::Identity();
     rotations_.push_back({g.time, (rotations_.back().world_from_vehicle * step).normalized()});
   }
-  // GPS: antenna positions
+  // GPS: antenna positions; new fixes change the smoothed values within one window before them
+  const std::size_t first_new = raw_.size();
   for (const auto& f : frame.gps) {
     if (!std::isfinite(f.latitude_deg) || !std::isfinite(f.longitude_deg) || !std::isfinite(f.altitude_m)) continue;
-    if (!antenna_.empty() && f.time <= antenna_.back().first) continue;
-    antenna_.emplace_back(f.time, gpsToWorld(f));
+    if (!raw_.empty() && f.time <= raw_.back().first) continue;
+    raw_.emplace_back(f.time, gpsToWorld(f));
   }
+  if (raw_.size() > first_new) smoothFrom(first_new);
   // heading: GPS course over the baseline against the integrated forward direction there
   if (!heading_known_ && antenna_.size() >= 2) {
     const Vector3 travel = antenna_.back().second - antenna_.front().second;
@@ -92,6 +95,37 @@ void PoseEstimator::add(const SensorFrame& frame) {
       heading_known_ = true;
     }
   }
+}
+
+void PoseEstimator::smoothFrom(std::size_t first_new) {
+  antenna_.resize(raw_.size());
+  const double w = config_.smoothing_window;
+  // the fixes whose window reaches a new fix
+  std::size_t start = first_new;
+  while (start > 0 && raw_[start - 1].first >= raw_[first_new].first - w) --start;
+  for (std::size_t i = start; i < raw_.size(); ++i) {
+    const double t = raw_[i].first;
+    std::size_t lo = i, hi = i;
+    while (lo > 0 && raw_[lo - 1].first >= t - w) --lo;
+    while (hi + 1 < raw_.size() && raw_[hi + 1].first <= t + w) ++hi;
+    antenna_[i] = raw_[i];
+    if (w <= 0 || hi - lo + 1 < 4) continue;
+    // least squares p(s) = c0 + c1 s + c2 s^2, s = t_k - t; the smoothed value is c0
+    Eigen::MatrixXd a(hi - lo + 1, 3);
+    Eigen::MatrixXd b(hi - lo + 1, 3);
+    for (std::size_t k = lo; k <= hi; ++k) {
+      const double ds = raw_[k].first - t;
+      a.row(k - lo) << 1.0, ds, ds * ds;
+      b.row(k - lo) = raw_[k].second.transpose();
+    }
+    const Eigen::MatrixXd c = a.colPivHouseholderQr().solve(b);
+    antenna_[i].second = c.row(0).transpose();
+  }
+}
+
+double PoseEstimator::finalUntil() const {
+  if (raw_.empty()) return -std::numeric_limits<double>::infinity();
+  return raw_.back().first - config_.smoothing_window;
 }
 
 Rotation PoseEstimator::rotationAt(double t) const {

@@ -6,8 +6,11 @@
 // roll and pitch from a plane fitted to the ground around the robot in the first sweep, heading
 // from the GPS course once the robot has moved heading_baseline metres (frames before that are
 // held back by the pipeline until then). Position is the GPS antenna position (WGS84 -> local ENU
-// at the rig's geodetic origin) minus the rotated antenna lever arm, interpolated linearly between
-// fixes. Poses between gyro samples are interpolated (slerp).
+// at the rig's geodetic origin) minus the rotated antenna lever arm. GPS noise is independent from
+// fix to fix while the vehicle moves smoothly, so each fix is replaced by a quadratic least-squares
+// fit (in time) to the fixes within +-smoothing_window of it; positions between fixes are
+// interpolated linearly. A frame is therefore processed once the fixes up to smoothing_window
+// after it have arrived (a fixed latency). Poses between gyro samples are interpolated (slerp).
 
 #include "core/sensor_data.hpp"
 #include "core/types.hpp"
@@ -23,6 +26,7 @@ struct PoseConfig {
   double level_min_range = 3.0;      // [m] ground points for the initial roll/pitch: horizontal range from
   double level_max_range = 15.0;     // [m] ... to
   double level_cell = 1.0;           // [m] lowest point per cell of this size enters the plane fit
+  double smoothing_window = 1.5;     // [s] half-width of the GPS smoothing window (0: raw fixes)
 };
 
 struct TimedRotation {
@@ -38,6 +42,8 @@ class PoseEstimator {
   void add(const SensorFrame& frame);
   // True once the initial attitude is known; poses are valid from then on.
   bool ready() const { return heading_known_; }
+  // Time [s] up to which poses are final: later GPS fixes no longer change them.
+  double finalUntil() const;
   // Vehicle pose at time t; valid when ready() and t lies within the data received so far
   // (outside, the nearest known value is used).
   Pose worldFromVehicle(double t) const;
@@ -56,7 +62,10 @@ class PoseEstimator {
   Rotation level_ = Rotation::Identity();      // roll and pitch of the first sweep
   std::vector<TimedRotation> rotations_;       // integrated from heading-free start (yaw 0)
   double yaw_offset_ = 0;                      // heading added once known
-  std::vector<std::pair<double, Vector3>> antenna_;  // GPS antenna positions [m] world ENU
+  void smoothFrom(std::size_t first);
+
+  std::vector<std::pair<double, Vector3>> raw_;      // GPS antenna positions [m] world ENU, as measured
+  std::vector<std::pair<double, Vector3>> antenna_;  // the same, smoothed
 };
 
 // Transforms every point of a sweep into the world frame with the pose at its own time.

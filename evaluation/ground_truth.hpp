@@ -1,0 +1,46 @@
+#pragma once
+// Ground truth from the scene and the recorded truth, for scoring; it never reaches core/.
+//  - per voxel: ground or non-ground by majority of the true classes of the points in it, the
+//    points placed with the true vehicle poses;
+//  - per horizontal cell: the true top height of whatever stands there and the true terrain height.
+
+#include "core/types.hpp"
+#include "rig/sensor_source.hpp"
+#include "sim/world.hpp"
+
+#include <cstdint>
+#include <unordered_map>
+
+namespace terrain::eval {
+
+enum class TruthLabel : std::uint8_t { Unknown = 0, Ground = 1, NonGround = 2 };
+
+class VoxelTruth {
+ public:
+  explicit VoxelTruth(double voxel_size) : size_(voxel_size) {}
+
+  // Adds a frame's points with their true classes (frames without truth are ignored).
+  void add(const rig::RigFrame& frame, const Pose& vehicle_from_lidar);
+  TruthLabel label(const VoxelIndex& index) const;
+  std::size_t size() const { return votes_.size(); }
+
+ private:
+  static std::uint64_t key(const VoxelIndex& i);
+  double size_;
+  std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> votes_;  // ground, non-ground
+};
+
+// True vehicle pose at time t from time-sorted true poses (slerp between neighbours).
+Pose interpolatePose(const std::vector<rig::TimedPose>& poses, double t);
+
+// True height [m] of the highest surface within the square cell of edge `cell` centred on (x, y)
+// (sampled at its centre and four points near its corners), and whether an object is it.
+struct CellTruth {
+  double top = 0;
+  double terrain = 0;
+  bool object = false;
+  int geom = -1;
+};
+CellTruth cellTruth(const sim::World& world, double x, double y, double cell);
+
+}  // namespace terrain::eval

@@ -1,0 +1,68 @@
+#include "evaluation/scoring.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace terrain::eval {
+
+SegmentationScores scoreVoxels(const VoxelMap& map, const std::vector<std::uint8_t>& ground, const VoxelTruth& truth) {
+  SegmentationScores out;
+  std::size_t tp = 0, fp = 0, fn = 0, tn = 0;
+  const auto& voxels = map.voxels();
+  for (std::size_t i = 0; i < voxels.size() && i < ground.size(); ++i) {
+    const TruthLabel t = truth.label(voxels[i].index);
+    if (t == TruthLabel::Unknown) {
+      ++out.unmatched;
+      continue;
+    }
+    const bool p = ground[i] != 0, g = t == TruthLabel::Ground;
+    if (p && g) ++tp;
+    else if (p) ++fp;
+    else if (g) ++fn;
+    else ++tn;
+  }
+  out.scores = binaryScores(tp, fp, fn, tn);
+  return out;
+}
+
+HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim::World& world,
+                          const std::vector<Point3>& robot_path) {
+  HeightScores out;
+  std::vector<double> before, after, seen_before, seen_after;
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> bands, objects;
+  // geom -> object id
+  std::map<int, std::string> owner;
+  for (const auto& o : world.truth().objects) {
+    for (const auto& g : o.geoms) owner[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = o.id;
+  }
+  for (const auto& v : mesh.vertices()) {
+    const double x = (v.cell.x() + 0.5) * voxel_size, y = (v.cell.y() + 0.5) * voxel_size;
+    const CellTruth t = cellTruth(world, x, y, voxel_size);
+    if (!std::isfinite(t.top)) continue;
+    if (!t.object) {
+      out.raised_terrain_cells += !v.estimates.empty() && v.height() > t.top + 1.0;
+      continue;
+    }
+    double d = std::numeric_limits<double>::infinity();
+    for (const auto& p : robot_path) d = std::min(d, std::hypot(p.x() - x, p.y() - y));
+    const double eb = v.sensed_height - t.top, ea = v.height() - t.top;
+    before.push_back(eb);
+    after.push_back(ea);
+    if (!v.estimates.empty()) seen_before.push_back(eb), seen_after.push_back(ea);
+    const char* band = d < 30 ? "0-30" : d < 60 ? "30-60" : d < 100 ? "60-100" : nullptr;
+    if (band) bands[band].first.push_back(eb), bands[band].second.push_back(ea);
+    if (auto it = owner.find(t.geom); it != owner.end()) {
+      objects[it->second].first.push_back(eb);
+      objects[it->second].second.push_back(ea);
+    }
+  }
+  out.before = errorStats(before);
+  out.after = errorStats(after);
+  out.seen_before = errorStats(seen_before);
+  out.seen_after = errorStats(seen_after);
+  for (const auto& [k, v] : bands) out.by_band[k] = {errorStats(v.first), errorStats(v.second)};
+  for (const auto& [k, v] : objects) out.by_object[k] = {errorStats(v.first), errorStats(v.second)};
+  return out;
+}
+
+}  // namespace terrain::eval

@@ -1,0 +1,36 @@
+#pragma once
+// Scores of a reconstruction against the scene's ground truth.
+
+#include "core/terrain_mesh.hpp"
+#include "core/voxel_map.hpp"
+#include "evaluation/ground_truth.hpp"
+#include "evaluation/metrics.hpp"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace terrain::eval {
+
+struct SegmentationScores {
+  BinaryScores scores;
+  std::size_t unmatched = 0;  // voxels of the map with no truth (no true point fell in them)
+};
+
+// Scores per voxel of a labelling (ground[i] for map voxel i) against the voxel truth.
+SegmentationScores scoreVoxels(const VoxelMap& map, const std::vector<std::uint8_t>& ground, const VoxelTruth& truth);
+
+struct HeightScores {
+  ErrorStats before, after;  // over object cells: sensed-only heights, then after recovery
+  std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_band;    // "0-30", "30-60", "60-100" [m]
+  std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_object;  // object id
+  ErrorStats seen_before, seen_after;  // object cells that received at least one estimate
+  std::size_t raised_terrain_cells = 0;  // cells raised although terrain is their true top
+};
+
+// Height errors of the mesh vertices over cells where an object is the true top. robot_path: the
+// true robot positions, for the distance bands (distance of a cell to the nearest of them).
+HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim::World& world,
+                          const std::vector<Point3>& robot_path);
+
+}  // namespace terrain::eval
