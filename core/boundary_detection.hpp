@@ -14,7 +14,7 @@ struct BoundaryDetectionConfig {
   double kx = 0.3;          // weight of horizontal change
   double ky = 1.0;          // weight of vertical change (> kx)
   double threshold = 60.0;  // gradient magnitude, grey levels (0-255 image)
-  int erode_width = 3, erode_height = 1;   // [px] erosion mask: keeps horizontal runs, drops specks
+  int erode_width = 5, erode_height = 1;   // [px] erosion mask: keeps horizontal runs of 5 px or more, drops specks
   int dilate_width = 3, dilate_height = 3; // [px] dilation mask
 };
 

@@ -1,0 +1,79 @@
+#include "core/boundary_detection.hpp"
+#include "core/boundary_estimation.hpp"
+#include "core/camera_model.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+namespace terrain {
+namespace {
+
+TEST(BoundaryDetectionTest, BoxAgainstTheSkyGivesItsTopOnTheKnownRows) {
+  // sky above row 100, a dark box from row 100 down in columns 60-180, and ground below row 200
+  cv::Mat img(240, 320, CV_8UC3, cv::Scalar(200, 220, 255));
+  cv::rectangle(img, cv::Rect(60, 100, 120, 140), cv::Scalar(60, 60, 70), cv::FILLED);
+  cv::Mat speck = img.clone();
+  speck.at<cv::Vec3b>(30, 250) = cv::Vec3b(0, 0, 0);  // one noisy pixel in the sky
+  const BoundaryImages b = detectBoundaries(speck, BoundaryDetectionConfig{});
+  // the box top: boundary pixels only on rows 99-100 (the kernel straddles the edge), in its columns
+  for (int col = 70; col < 170; col += 10) {
+    int first = -1;
+    for (int row = 0; row < 240; ++row) {
+      if (b.cleaned.at<std::uint8_t>(row, col)) {
+        first = row;
+        break;
+      }
+    }
+    EXPECT_GE(first, 98) << col;
+    EXPECT_LE(first, 100) << col;
+  }
+  // the speck is in the raw response and gone after erosion and dilation
+  EXPECT_TRUE(b.raw.at<std::uint8_t>(30, 250) || b.raw.at<std::uint8_t>(29, 250));
+  EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(230, 10, 40, 40))), 0);
+  EXPECT_THROW(detectBoundaries(cv::Mat(), BoundaryDetectionConfig{}), std::invalid_argument);
+}
+
+TEST(BoundaryDetectionTest, VerticalChangesWeighMoreThanHorizontal) {
+  cv::Mat horizontal_edge(50, 50, CV_8UC1, cv::Scalar(0)), vertical_edge(50, 50, CV_8UC1, cv::Scalar(0));
+  horizontal_edge(cv::Rect(0, 25, 50, 25)).setTo(100);
+  vertical_edge(cv::Rect(25, 0, 25, 50)).setTo(100);
+  const BoundaryDetectionConfig c;  // kx < ky
+  double mh = 0, mv = 0;
+  cv::minMaxLoc(detectBoundaries(horizontal_edge, c).magnitude, nullptr, &mh);
+  cv::minMaxLoc(detectBoundaries(vertical_edge, c).magnitude, nullptr, &mv);
+  // same step: (a + b + a) * 100 = 400 per kernel; weights sqrt(ky) and sqrt(kx)
+  EXPECT_NEAR(mh, 400 * std::sqrt(c.ky), 1e-3);
+  EXPECT_NEAR(mv, 400 * std::sqrt(c.kx), 1e-3);
+}
+
+TEST(BoundaryEstimationTest, InverseProjectionOfAKnownTopPixelGivesTheExactHeight) {
+  // camera 1.6 m up looking north (+y), level; a wall top 12 m high at y = 20
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  Pose world_from_camera = Pose::Identity();
+  world_from_camera.linear().col(0) = Vector3(1, 0, 0);   // x right = east
+  world_from_camera.linear().col(1) = Vector3(0, 0, -1);  // y down
+  world_from_camera.linear().col(2) = Vector3(0, 1, 0);   // z forward = north
+  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  const Point3 top(3.0, 20.0, 12.0);
+  const auto px = project(k, world_from_camera.inverse() * top);
+  ASSERT_TRUE(px.has_value());
+  const Vector3 dir = world_from_camera.linear() * pixelRay(k, *px);
+  EXPECT_NEAR(heightAbove(world_from_camera.translation(), dir, 3.0, 20.0), 12.0, 1e-9);
+  // and the stage raises a non-ground vertex at (3, 20) from the boundary image
+  VoxelMap map(VoxelMapConfig{0.2});
+  map.insert({Point3(3.05, 20.05, 1.05)}, 0);
+  map.voxels()[0].label = VoxelLabel::NonGround;
+  TerrainMesh mesh;
+  mesh.update(map, map.takeNewVoxels());
+  const Vector3 cell_centre(3.1, 20.1, 12.0);
+  const auto top_px = project(k, world_from_camera.inverse() * cell_centre);
+  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
+  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, BoundaryEstimationConfig{});
+  EXPECT_EQ(stats.estimated, 1);
+  // the pixel centre lies within half a pixel of the projected top: about 2 cm at 20 m
+  EXPECT_NEAR(mesh.vertices()[0].height(), 12.0, 0.05);
+}
+
+}  // namespace
+}  // namespace terrain

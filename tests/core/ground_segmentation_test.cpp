@@ -1,0 +1,158 @@
+#include "core/ground_segmentation.hpp"
+
+#include "core/random.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace terrain {
+namespace {
+
+TEST(GroundSegmentationTest, HistogramPeakOfASyntheticColumnIsAtTheKnownHeight) {
+  // 200 ground heights around 1.30 m, a wall spread evenly from 1.5 m to 4 m
+  std::vector<double> h;
+  Random rng(3);
+  for (int i = 0; i < 200; ++i) h.push_back(1.30 + 0.02 * rng.normal());
+  for (int i = 0; i < 100; ++i) h.push_back(1.5 + 2.5 * i / 100.0);
+  EXPECT_NEAR(histogramPeak(h, 0.1), 1.30, 0.02);
+  EXPECT_TRUE(std::isnan(histogramPeak({}, 0.1)));
+}
+
+// flat ground at z = 0 (voxels 0.2 m) with a 2 m box standing on it
+VoxelMap groundWithBox() {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, 0.05);
+      const bool box = x >= 0 && x < 10 && y >= 0 && y < 10;
+      const bool wall = box && (x == 0 || x == 9 || y == 0 || y == 9);
+      for (int z = 1; wall && z < 10; ++z) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, z * 0.2 + 0.1);
+    }
+  }
+  map.insert(pts, 0);
+  return map;
+}
+
+TEST(GroundSegmentationTest, GmrfCleansANoisyLabelling) {
+  VoxelMap map = groundWithBox();
+  GroundSegmentationConfig cfg;
+  cfg.histogram = GroundSegmentationConfig::Histogram::Global;
+  const SegmentationResult clean = segmentGround(map, cfg);
+  // truth: ground voxels are the ones at z index 0; the lowest wall voxel (0.25 m above the
+  // ground, inside the +-delta band) is ambiguous and not scored
+  auto scored = [&](std::size_t i) { return map.voxels()[i].index.z() != 1; };
+  std::size_t wrong_clean = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) wrong_clean += scored(i) && clean.refined[i] != (map.voxels()[i].index.z() == 0);
+  EXPECT_EQ(wrong_clean, 0u);
+  // flip 10 % of the rough labels: the refinement must undo nearly all of it
+  GmrfProblem p;
+  {
+    // rebuild the problem from the map through a second segmentation with a noisy start
+    std::vector<std::uint8_t> noisy = clean.rough;
+    Random rng(5);
+    std::size_t flipped = 0;
+    for (auto& l : noisy) {
+      if (rng.uniform() < 0.1) l ^= 1, ++flipped;
+    }
+    ASSERT_GT(flipped, 100u);
+    // unary terms as segmentGround builds them
+    const double a = cfg.alpha;
+    for (std::size_t i = 0; i < map.size(); ++i) {
+      const bool g1 = clean.rough[i];
+      p.unary_ground.push_back(g1 ? -2 * a : 2 * a);
+      p.unary_nonground.push_back(g1 ? 2 * a : -2 * a);
+      const auto& idx = map.voxels()[i].index;
+      p.parity.push_back(static_cast<std::uint8_t>((idx.x() + idx.y() + idx.z()) & 1));
+    }
+    for (std::uint32_t i = 0; i < map.size(); ++i) {
+      for (int axis = 0; axis < 3; ++axis) {
+        VoxelIndex j = map.voxels()[i].index;
+        j[axis] += 1;
+        const auto k = map.find(j);
+        if (k >= 0) p.edges.push_back({i, static_cast<std::uint32_t>(k), cfg.beta + cfg.gamma});
+      }
+    }
+    std::vector<std::uint8_t> icm = noisy;
+    solveIcm(p, icm, 20, 0);
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < map.size(); ++i) wrong += scored(i) && icm[i] != (map.voxels()[i].index.z() == 0);
+    EXPECT_LT(wrong, flipped / 20) << "ICM left " << wrong << " of " << flipped << " flipped labels";
+    EXPECT_LT(gmrfEnergy(p, icm), gmrfEnergy(p, noisy));
+  }
+}
+
+// a random binary problem of n nodes on a chain with cross links
+GmrfProblem randomProblem(int n, std::uint64_t seed) {
+  Random rng(seed);
+  GmrfProblem p;
+  for (int i = 0; i < n; ++i) {
+    p.unary_ground.push_back(rng.uniform(-2, 2));
+    p.unary_nonground.push_back(rng.uniform(-2, 2));
+    p.parity.push_back(static_cast<std::uint8_t>(i & 1));
+  }
+  for (int i = 0; i + 1 < n; ++i) p.edges.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1), rng.uniform(0.1, 1.5)});
+  for (int i = 0; i + 3 < n; i += 2) p.edges.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 3), rng.uniform(0.1, 1.5)});
+  return p;
+}
+
+TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const int n = 14;
+    const GmrfProblem p = randomProblem(n, seed);
+    double best = 1e18;
+    for (int mask = 0; mask < (1 << n); ++mask) {
+      std::vector<std::uint8_t> l(n);
+      for (int i = 0; i < n; ++i) l[i] = (mask >> i) & 1;
+      best = std::min(best, gmrfEnergy(p, l));
+    }
+    std::vector<std::uint8_t> cut(n, 0), icm(n, 0);
+    solveMinCut(p, cut);
+    solveIcm(p, icm, 100, 1);
+    EXPECT_NEAR(gmrfEnergy(p, cut), best, 1e-9) << "seed " << seed;
+    EXPECT_LE(gmrfEnergy(p, cut), gmrfEnergy(p, icm) + 1e-9) << "seed " << seed;
+  }
+}
+
+TEST(GroundSegmentationTest, IcmGivesTheSameLabelsWhateverTheThreadCount) {
+  const GmrfProblem p = randomProblem(5000, 9);
+  std::vector<std::uint8_t> a(5000, 0), b(5000, 0);
+  solveIcm(p, a, 50, 1);
+  solveIcm(p, b, 50, 2);
+  EXPECT_EQ(a, b);
+}
+
+// a 12-degree slope with a box on it: the global histogram misses most of the slope, the local
+// one follows it
+TEST(GroundSegmentationTest, LocalHistogramFollowsASlope) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  const double slope = std::tan(12 * M_PI / 180);
+  for (double x = -20; x < 20; x += 0.2) {
+    for (double y = -10; y < 10; y += 0.2) pts.emplace_back(x + 0.1, y + 0.1, slope * x);
+  }
+  for (double z = 0.1; z < 3; z += 0.2) {
+    for (double y = 0; y < 4; y += 0.2) pts.emplace_back(5.1, y + 0.1, slope * 5 + z);
+  }
+  map.insert(pts, 0);
+  auto accuracy = [&](GroundSegmentationConfig::Histogram h) {
+    GroundSegmentationConfig cfg;
+    cfg.histogram = h;
+    const auto r = segmentGround(map, cfg);
+    std::size_t right = 0;
+    for (std::size_t i = 0; i < map.size(); ++i) {
+      const auto& v = map.voxels()[i];
+      const bool truth = v.height < slope * ((v.index.x() + 0.5) * 0.2) + 0.15 || std::abs(v.index.x() * 0.2 + 0.1 - 5.1) > 0.15;
+      right += (r.refined[i] != 0) == truth;
+    }
+    return static_cast<double>(right) / map.size();
+  };
+  const double global = accuracy(GroundSegmentationConfig::Histogram::Global);
+  const double local = accuracy(GroundSegmentationConfig::Histogram::Local);
+  EXPECT_LT(global, 0.5);
+  EXPECT_GT(local, 0.97);
+}
+
+}  // namespace
+}  // namespace terrain

@@ -1,0 +1,134 @@
+#include "core/pipeline.hpp"
+
+#include "evaluation/scoring.hpp"
+#include "scenes/scene_generator.hpp"
+#include "sim/simulated_rig.hpp"
+#include "tests/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace terrain {
+namespace {
+
+std::shared_ptr<sim::World> urbanWorld(const test::TempDir& dir) {
+  scenes::SceneConfig cfg;
+  cfg.type = "urban";
+  cfg.seed = 3;
+  cfg.extent = 50;
+  scenes::writeScene(scenes::generateScene(cfg), dir / "u.xml", false);
+  return std::make_shared<sim::World>(dir / "u.xml");
+}
+
+sim::SimConfig smallCamera() {
+  sim::SimConfig c;
+  c.camera.width = 320;
+  c.camera.height = 240;
+  return c;
+}
+
+TEST(PoseEstimationTest, GpsAndGyroFusionTracksTheTruePose) {
+  test::TempDir dir;
+  auto world = urbanWorld(dir);
+  sim::SimulatedRig rig(world, smallCamera(), 40);
+  PoseEstimator poses(rig.calibration(), PoseConfig{});
+  std::vector<rig::FrameTruth> truths;
+  while (auto f = rig.next()) {
+    poses.add(f->sensors);
+    truths.push_back(*f->truth);
+  }
+  ASSERT_TRUE(poses.ready());
+  double worst_pos = 0, worst_angle = 0;
+  for (const auto& t : truths) {
+    for (const auto& p : t.poses) {
+      if (p.time > poses.finalUntil()) continue;
+      const Pose est = poses.worldFromVehicle(p.time);
+      worst_pos = std::max(worst_pos, (est.translation() - p.world_from_vehicle.translation()).norm());
+      worst_angle = std::max(worst_angle, Eigen::AngleAxisd(est.linear().transpose() * p.world_from_vehicle.linear()).angle());
+    }
+  }
+  // GPS sigma 5 cm horizontal, 10 cm vertical, smoothed; heading from a 2 m baseline
+  EXPECT_LT(worst_pos, 0.12);
+  EXPECT_LT(worst_angle, 3.0 * M_PI / 180);
+}
+
+TEST(PipelineTest, FullRunBringsObjectHeightsCloserToTheTruth) {
+  test::TempDir dir;
+  auto world = urbanWorld(dir);
+  sim::SimulatedRig rig(world, smallCamera(), 30);
+  Pipeline pipeline(rig.calibration(), PipelineConfig{});
+  std::vector<Point3> path;
+  while (auto f = rig.next()) {
+    for (const auto& p : f->truth->poses) path.push_back(p.world_from_vehicle.translation());
+    pipeline.process(f->sensors);
+  }
+  pipeline.finish();
+  ASSERT_EQ(pipeline.records().size(), 30u);
+  const auto h = eval::scoreHeights(pipeline.mesh(), pipeline.map().voxelSize(), *world, path);
+  ASSERT_GT(h.seen_after.count, 50u);
+  EXPECT_LT(h.seen_after.mae, 0.5 * h.seen_before.mae) << h.seen_before.mae << " -> " << h.seen_after.mae;
+  EXPECT_LT(h.after.mae, h.before.mae);
+  // the segmentation found ground and objects
+  std::size_t ground = 0;
+  for (auto g : pipeline.segmentation().refined) ground += g;
+  EXPECT_GT(ground, pipeline.map().size() / 2);
+  EXPECT_LT(ground, pipeline.map().size());
+}
+
+TEST(PipelineTest, BadFramesGiveWarningsNotCrashes) {
+  test::TempDir dir;
+  auto world = urbanWorld(dir);
+  sim::SimulatedRig rig(world, smallCamera(), 30);
+  Pipeline pipeline(rig.calibration(), PipelineConfig{});
+  int k = 0;
+  while (auto f = rig.next()) {
+    SensorFrame s = f->sensors;
+    if (k == 12) s.sweep.points.clear();                     // empty sweep
+    if (k == 13) s.sweep.points[5].x = std::nanf("");        // NaN point
+    if (k == 14) s.sweep.points[6].z = INFINITY;             // infinite point
+    if (k == 15) s.image.reset();                            // no image
+    if (k == 16) s.gps.clear();                              // no GPS fix
+    if (k == 17) s.image->rgb = cv::Mat();                   // empty image
+    if (k == 18) s.gyro.clear();                             // no gyro
+    pipeline.process(s);
+    ++k;
+  }
+  pipeline.finish();
+  const auto& w = pipeline.warnings();
+  auto has = [&](const std::string& text) {
+    for (const auto& s : w) if (s.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("frame 12: empty lidar sweep"));
+  EXPECT_TRUE(has("frame 13: 1 lidar points with NaN"));
+  EXPECT_TRUE(has("frame 14: 1 lidar points with NaN"));
+  EXPECT_TRUE(has("frame 15: no camera image"));
+  EXPECT_TRUE(has("frame 16: no GPS fix"));
+  EXPECT_TRUE(has("frame 17: camera image is empty"));
+  EXPECT_TRUE(has("frame 18: no gyro samples"));
+  EXPECT_EQ(pipeline.records().size(), 30u);
+  for (const auto& v : pipeline.map().voxels()) ASSERT_TRUE(std::isfinite(v.height));
+}
+
+TEST(PipelineTest, AStandingRobotAndAnEmptyWorldAreReported) {
+  // a robot that never moves never learns its heading; a world with only ground has no objects
+  auto world = test::wallWorld(500.0);  // the wall is out of range: only ground is seen
+  sim::SimConfig c = smallCamera();
+  c.robot.speed = 0.001;
+  sim::SimulatedRig rig(world, c, 5);
+  Pipeline pipeline(rig.calibration(), PipelineConfig{});
+  while (auto f = rig.next()) pipeline.process(f->sensors);
+  pipeline.finish();
+  const auto& w = pipeline.warnings();
+  auto has = [&](const std::string& text) {
+    for (const auto& s : w) if (s.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("heading unknown"));
+  EXPECT_TRUE(has("the camera sees no non-ground vertex") || has("no objects"));
+  EXPECT_EQ(pipeline.records().size(), 5u);
+}
+
+}  // namespace
+}  // namespace terrain

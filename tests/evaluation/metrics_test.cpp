@@ -1,0 +1,43 @@
+#include "evaluation/metrics.hpp"
+
+#include <gtest/gtest.h>
+
+namespace terrain::eval {
+namespace {
+
+TEST(MetricsTest, BinaryScoresOfASmallConfusionMatrix) {
+  // tp 6, fp 2, fn 3, tn 9
+  const BinaryScores s = binaryScores(6, 2, 3, 9);
+  EXPECT_DOUBLE_EQ(s.precision, 6.0 / 8.0);
+  EXPECT_DOUBLE_EQ(s.recall, 6.0 / 9.0);
+  EXPECT_DOUBLE_EQ(s.f1, 12.0 / 17.0);
+  EXPECT_DOUBLE_EQ(s.iou, 6.0 / 11.0);
+  const std::vector<bool> pred{1, 1, 0, 0, 1}, truth{1, 0, 1, 0, 1}, skip{0, 0, 0, 0, 1};
+  const BinaryScores t = binaryScores(pred, truth, skip);
+  EXPECT_EQ(t.tp, 1u);
+  EXPECT_EQ(t.fp, 1u);
+  EXPECT_EQ(t.fn, 1u);
+  EXPECT_EQ(t.tn, 1u);
+  EXPECT_DOUBLE_EQ(binaryScores(0, 0, 0, 5).f1, 0.0);
+}
+
+TEST(MetricsTest, ErrorStatsOfAKnownSet) {
+  // errors 1, -1, 3, 5: mean 2, |e| mean 2.5, e^2 mean 9, variance 9 - 4 = 5
+  const ErrorStats e = errorStats({1, -1, 3, 5});
+  EXPECT_DOUBLE_EQ(e.bias, 2.0);
+  EXPECT_DOUBLE_EQ(e.mae, 2.5);
+  EXPECT_DOUBLE_EQ(e.rmse, 3.0);
+  EXPECT_DOUBLE_EQ(e.variance, 5.0);
+  EXPECT_EQ(errorStats({}).count, 0u);
+}
+
+TEST(MetricsTest, Percentiles) {
+  std::vector<double> v;
+  for (int i = 1; i <= 100; ++i) v.push_back(i);
+  const Percentiles p = percentiles(v);
+  EXPECT_DOUBLE_EQ(p.median, 50);
+  EXPECT_DOUBLE_EQ(p.p95, 95);
+}
+
+}  // namespace
+}  // namespace terrain::eval
