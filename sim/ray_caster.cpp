@@ -1,5 +1,7 @@
 #include "sim/ray_caster.hpp"
 
+#include "sim/hfield_ray.hpp"
+
 #include <algorithm>
 #include <limits>
 #include <numeric>
@@ -100,7 +102,7 @@ int RayCaster::build(int first, int count) {
 double RayCaster::castGeom(int g, const mjtNum* pnt, const mjtNum* vec) const {
   switch (m_->geom_type[g]) {
     case mjGEOM_MESH: return mj_rayMesh(m_, d_, g, pnt, vec);
-    case mjGEOM_HFIELD: return mj_rayHfield(m_, d_, g, pnt, vec);
+    case mjGEOM_HFIELD: return rayHfield(m_, d_, g, pnt, vec);
     default:
       return mju_rayGeom(d_->geom_xpos + 3 * g, d_->geom_xmat + 9 * g, m_->geom_size + 3 * g, pnt, vec,
                          m_->geom_type[g]);

@@ -1,4 +1,5 @@
 #include "sim/ray_caster.hpp"
+#include "sim/hfield_ray.hpp"
 
 #include "scenes/scene_generator.hpp"
 #include "sim/lidar.hpp"
@@ -67,6 +68,47 @@ TEST(RayCasterTest, MatchesMjRayOnGeneratedScene) {
       }
     }
     EXPECT_GT(hits, 3000) << type;
+  }
+}
+
+}  // namespace
+}  // namespace terrain::sim
+
+namespace terrain::sim {
+namespace {
+
+// the cell walk must give MuJoCo's own heightfield distances on steep, rough terrain
+TEST(HfieldRayTest, MatchesMjRayHfieldOnRoughAndSlopedTerrain) {
+  test::TempDir dir;
+  for (const char* type : {"rough", "slope", "mixed"}) {
+    scenes::SceneConfig cfg;
+    cfg.type = type;
+    cfg.seed = 2;
+    cfg.extent = 30;
+    cfg.hfield_cell = 0.5;
+    scenes::writeScene(scenes::generateScene(cfg), dir / (std::string(type) + ".xml"), false);
+    const World world(dir / (std::string(type) + ".xml"));
+    const int g = world.terrainGeom();
+    Random rng(17);
+    int hits = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const double x = rng.uniform(-28, 28), y = rng.uniform(-28, 28);
+      // from just above the ground, and from far outside and above the field
+      const bool outside = i % 10 == 0;
+      const Vector3 p = outside ? Vector3(rng.uniform(-60, 60), rng.uniform(-60, 60), rng.uniform(-5, 40))
+                                : Vector3(x, y, world.terrainHeight(x, y) + rng.uniform(0.3, 3.0));
+      const double az = rng.uniform(0, 2 * M_PI), el = outside ? rng.uniform(-1.2, 0.3) : rng.uniform(-0.45, 0.1);
+      const Vector3 v(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      const mjtNum pnt[3] = {p.x(), p.y(), p.z()}, vec[3] = {v.x(), v.y(), v.z()};
+      const double ref = mj_rayHfield(world.model(), world.data(), g, pnt, vec);
+      const double fast = rayHfield(world.model(), world.data(), g, pnt, vec);
+      ASSERT_EQ(ref < 0, fast < 0) << type << " ray " << i << ": " << ref << " vs " << fast;
+      if (ref >= 0) {
+        ASSERT_NEAR(fast, ref, 1e-6) << type << " ray " << i;
+        ++hits;
+      }
+    }
+    EXPECT_GT(hits, 1500) << type;
   }
 }
 

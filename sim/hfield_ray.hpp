@@ -1,0 +1,15 @@
+#pragma once
+// Ray against a MuJoCo heightfield geom, with mj_rayHfield's geometry (the base box under the
+// grid, two triangles per grid cell split along the (c, r)-(c+1, r+1) diagonal, the side walls of
+// the top box), but visiting only the cells the ray passes over, nearest first, and stopping at
+// the first hit. MuJoCo tests every cell of the segment's bounding rectangle instead, which for a
+// near-horizontal lidar ray is thousands of cells. Same distances to rounding (tested).
+
+#include <mujoco/mujoco.h>
+
+namespace terrain::sim {
+
+// Distance along pnt + x * vec (x >= 0) to the heightfield geom `geom`, or -1 if none.
+double rayHfield(const mjModel* m, const mjData* d, int geom, const mjtNum pnt[3], const mjtNum vec[3]);
+
+}  // namespace terrain::sim
