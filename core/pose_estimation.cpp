@@ -52,8 +52,7 @@ void PoseEstimator::levelFromSweep(const LidarSweep& sweep) {
     pts.swap(kept);
   }
   // the ground normal in the vehicle frame is the world up axis seen from the vehicle
-  const Vector3 up_in_vehicle = Vector3(-plane[0], -plane[1], 1.0).normalized();
-  level_ = Rotation::FromTwoVectors(up_in_vehicle, Vector3::UnitZ());
+  ground_up_ = Vector3(-plane[0], -plane[1], 1.0).normalized();
   levelled_ = true;
 }
 
@@ -62,7 +61,7 @@ void PoseEstimator::add(const SensorFrame& frame) {
   // integrate the gyro: each sample is the mean rate over the preceding period
   if (rotations_.empty()) {
     const double t0 = frame.gyro.empty() ? frame.sweep.start_time : frame.gyro.front().time - calibration_.gyro_period;
-    rotations_.push_back({t0, level_});
+    rotations_.push_back({t0, Rotation::Identity()});
   }
   for (const auto& g : frame.gyro) {
     if (!g.rate.allFinite() || g.time <= rotations_.back().time) continue;
@@ -79,22 +78,30 @@ void PoseEstimator::add(const SensorFrame& frame) {
     raw_.emplace_back(f.time, gpsToWorld(f));
   }
   if (raw_.size() > first_new) smoothFrom(first_new);
-  // heading: GPS course over the baseline against the integrated forward direction there
-  if (!heading_known_ && antenna_.size() >= 2) {
-    const Vector3 travel = antenna_.back().second - antenna_.front().second;
-    if (travel.head<2>().norm() >= config_.heading_baseline) {
-      // mean forward direction (yaw-free integration) over the same interval
-      Vector3 forward = Vector3::Zero();
-      for (const auto& r : rotations_) {
-        if (r.time >= antenna_.front().first && r.time <= antenna_.back().first) {
-          forward += r.world_from_vehicle * Vector3::UnitX();
-        }
-      }
-      if (forward.head<2>().norm() < 1e-9) forward = Vector3::UnitX();
-      yaw_offset_ = std::atan2(travel.y(), travel.x()) - std::atan2(forward.y(), forward.x());
-      heading_known_ = true;
-    }
+  if (!heading_known_ && antenna_.size() >= 2 &&
+      (antenna_.back().second - antenna_.front().second).head<2>().norm() >= config_.heading_baseline) {
+    initialiseAttitude();
+    heading_known_ = true;
   }
+}
+
+void PoseEstimator::initialiseAttitude() {
+  // course: the GPS displacements, against the integrated forward axis over the same steps
+  Vector3 course = Vector3::Zero(), forward = Vector3::Zero();
+  for (std::size_t i = 0; i + 1 < antenna_.size(); ++i) {
+    const Vector3 step = antenna_[i + 1].second - antenna_[i].second;
+    course += step;
+    const double mid = 0.5 * (antenna_[i].first + antenna_[i + 1].first);
+    forward += step.norm() * (rotationAt(mid) * Vector3::UnitX());
+  }
+  const Rotation align = Rotation::FromTwoVectors(forward.normalized(), course.normalized());
+  // roll about the course: bring the first sweep's ground normal as close to vertical as it goes
+  const Vector3 f = course.normalized();
+  const Vector3 up = align * (rotations_.front().world_from_vehicle * ground_up_);
+  const Vector3 u = (up - up.dot(f) * f), z = (Vector3::UnitZ() - f.z() * f);
+  double roll = 0;
+  if (u.norm() > 1e-9 && z.norm() > 1e-9) roll = std::atan2(f.dot(u.cross(z)), u.dot(z));
+  initial_ = (Rotation(Eigen::AngleAxisd(roll, f)) * align).normalized();
 }
 
 void PoseEstimator::smoothFrom(std::size_t first_new) {
@@ -129,16 +136,15 @@ double PoseEstimator::finalUntil() const {
 }
 
 Rotation PoseEstimator::rotationAt(double t) const {
-  const Rotation yaw(Eigen::AngleAxisd(yaw_offset_, Vector3::UnitZ()));
-  if (rotations_.empty()) return yaw * level_;
+  if (rotations_.empty()) return initial_;
   auto it = std::lower_bound(rotations_.begin(), rotations_.end(), t,
                              [](const TimedRotation& r, double v) { return r.time < v; });
-  if (it == rotations_.begin()) return yaw * it->world_from_vehicle;
-  if (it == rotations_.end()) return yaw * rotations_.back().world_from_vehicle;
+  if (it == rotations_.begin()) return initial_ * it->world_from_vehicle;
+  if (it == rotations_.end()) return initial_ * rotations_.back().world_from_vehicle;
   const TimedRotation& b = *it;
   const TimedRotation& a = *(it - 1);
   const double s = (t - a.time) / (b.time - a.time);
-  return yaw * a.world_from_vehicle.slerp(s, b.world_from_vehicle);
+  return initial_ * a.world_from_vehicle.slerp(s, b.world_from_vehicle);
 }
 
 Vector3 PoseEstimator::antennaAt(double t) const {

@@ -2,10 +2,11 @@
 // Stage 1, pose: the vehicle pose from GPS (position) and gyro (rotation), as the paper's robot
 // had it, and the de-skewing of lidar points with their own timestamps.
 //
-// Fusion. Rotation is the integral of the gyro's angular rate, started from an initial attitude:
-// roll and pitch from a plane fitted to the ground around the robot in the first sweep, heading
-// from the GPS course once the robot has moved heading_baseline metres (frames before that are
-// held back by the pipeline until then). Position is the GPS antenna position (WGS84 -> local ENU
+// Fusion. Rotation is the integral of the gyro's angular rate from an initial attitude E, which the
+// gyro cannot give. A wheeled robot moves along its forward axis, so once it has moved
+// heading_baseline metres the GPS course over that stretch fixes heading and pitch: E turns the
+// integrated forward axis onto the course. Roll, about that axis, comes from a plane fitted to the
+// ground around the robot in the first sweep. Frames before that are held back by the pipeline. Position is the GPS antenna position (WGS84 -> local ENU
 // at the rig's geodetic origin) minus the rotated antenna lever arm. GPS noise is independent from
 // fix to fix while the vehicle moves smoothly, so each fix is replaced by a quadratic least-squares
 // fit (in time) to the fixes within +-smoothing_window of it; positions between fixes are
@@ -59,9 +60,11 @@ class PoseEstimator {
   PoseConfig config_;
   bool levelled_ = false;
   bool heading_known_ = false;
-  Rotation level_ = Rotation::Identity();      // roll and pitch of the first sweep
-  std::vector<TimedRotation> rotations_;       // integrated from heading-free start (yaw 0)
-  double yaw_offset_ = 0;                      // heading added once known
+  void initialiseAttitude();
+
+  Vector3 ground_up_ = Vector3::UnitZ();       // ground normal seen in the vehicle frame, first sweep
+  std::vector<TimedRotation> rotations_;       // gyro integral from the identity at the first sample
+  Rotation initial_ = Rotation::Identity();    // E: world_from_vehicle at the first sample
   void smoothFrom(std::size_t first);
 
   std::vector<std::pair<double, Vector3>> raw_;      // GPS antenna positions [m] world ENU, as measured
