@@ -8,7 +8,7 @@
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
 #include "core/pipeline.hpp"
-#include "evaluation/scoring.hpp"
+#include "evaluation/report.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
 #include "scenes/scene_generator.hpp"
@@ -104,48 +104,36 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-nlohmann::json errorJson(const eval::ErrorStats& e) {
-  return {{"mae_m", e.mae}, {"rmse_m", e.rmse}, {"bias_m", e.bias}, {"variance_m2", e.variance}, {"cells", e.count}};
-}
-
-nlohmann::json binaryJson(const eval::BinaryScores& b) {
-  return {{"precision", b.precision}, {"recall", b.recall}, {"f1", b.f1}, {"iou", b.iou},
-          {"tp", b.tp}, {"fp", b.fp}, {"fn", b.fn}, {"tn", b.tn}};
-}
-
-// scores against the ground truth, printed as a scorecard and kept in report.json
-nlohmann::json scoreRun(const Pipeline& pipeline, const eval::VoxelTruth& truth, const sim::World& world,
-                        const std::vector<Point3>& path) {
-  nlohmann::json r;
-  const auto rough = eval::scoreVoxels(pipeline.map(), pipeline.segmentation().rough, truth);
-  const auto refined = eval::scoreVoxels(pipeline.map(), pipeline.segmentation().refined, truth);
-  const std::string solver = pipeline.segmentation().iterations > 0 ? "gmrf_icm" : "gmrf_mincut";
-  r["ground_segmentation"]["histogram"] = binaryJson(rough.scores);
-  r["ground_segmentation"][solver] = binaryJson(refined.scores);
-  r["ground_segmentation"]["unmatched_voxels"] = refined.unmatched;
-  const auto h = eval::scoreHeights(pipeline.mesh(), pipeline.map().voxelSize(), world, path);
-  r["height_recovery"]["before"] = errorJson(h.before);
-  r["height_recovery"]["after"] = errorJson(h.after);
-  r["height_recovery"]["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
-  r["height_recovery"]["raised_terrain_cells"] = h.raised_terrain_cells;
-  for (const auto& [band, e] : h.by_band) {
-    r["height_recovery"]["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+// the scorecard on the terminal, from the report
+void printScorecard(const nlohmann::json& r) {
+  std::cout << std::fixed << std::setprecision(3) << "scorecard\n  ground segmentation per voxel    F1     IoU    precision  recall\n";
+  for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
+    const auto& g = r["ground_segmentation"][m];
+    std::cout << "    " << std::left << std::setw(28) << m << std::right << g["f1"].get<double>() << "  " << g["iou"].get<double>()
+              << "  " << g["precision"].get<double>() << "      " << g["recall"].get<double>() << "\n";
   }
-  std::cout << std::setprecision(3) << "scorecard\n"
-            << "  ground segmentation per voxel   F1      IoU     precision recall\n"
-            << "    height histogram (G1)         " << rough.scores.f1 << "   " << rough.scores.iou << "   "
-            << rough.scores.precision << "     " << rough.scores.recall << "\n"
-            << "    GMRF (" << solver << ")" << std::string(std::max<int>(1, 18 - static_cast<int>(solver.size())), ' ')
-            << refined.scores.f1 << "   " << refined.scores.iou << "   " << refined.scores.precision << "     "
-            << refined.scores.recall << "\n"
-            << "  object heights over " << h.after.count << " cells   MAE [m]  RMSE [m]  bias [m]  variance [m2]\n"
-            << "    sensed only                   " << h.before.mae << "    " << h.before.rmse << "    " << h.before.bias
-            << "    " << h.before.variance << "\n"
-            << "    after boundary estimation     " << h.after.mae << "    " << h.after.rmse << "    " << h.after.bias
-            << "    " << h.after.variance << "\n"
-            << "  of which estimated: " << h.seen_after.count << " cells, MAE " << h.seen_before.mae << " -> "
-            << h.seen_after.mae << " m; terrain cells wrongly raised: " << h.raised_terrain_cells << "\n";
-  return r;
+  const auto& h = r["height_recovery"];
+  std::cout << "  object heights (" << h["after"]["cells"].get<std::size_t>() << " cells)   MAE m   RMSE m  bias m   variance m2\n";
+  for (const char* k : {"before", "after"}) {
+    std::cout << "    " << std::left << std::setw(28) << (std::string(k) == "before" ? "sensed only" : "boundary estimation") << std::right
+              << h[k]["mae_m"].get<double>() << "  " << h[k]["rmse_m"].get<double>() << "  " << h[k]["bias_m"].get<double>() << "  "
+              << h[k]["variance_m2"].get<double>() << "\n";
+  }
+  std::cout << "    cells that got an estimate: " << h["estimated_cells"]["after"]["cells"].get<std::size_t>() << ", MAE "
+            << h["estimated_cells"]["before"]["mae_m"].get<double>() << " -> " << h["estimated_cells"]["after"]["mae_m"].get<double>()
+            << " m; terrain cells wrongly raised: " << h["raised_terrain_cells"].get<std::size_t>() << "\n";
+  if (r["height_baselines"].contains("inpainting")) {
+    const auto& b = r["height_baselines"];
+    std::cout << "  height map over object cells     coverage  MAE m\n";
+    for (const char* k : {"sensed_only", "inpainting", "boundary_estimation"}) {
+      std::cout << "    " << std::left << std::setw(28) << k << std::right << b[k]["coverage"].get<double>() << "     "
+                << b[k]["mae_m"].get<double>() << "\n";
+    }
+  }
+  std::cout << "  boundary coverage: " << r["boundary_coverage_before"].get<double>() << " sensed only, "
+            << r["boundary_coverage"].get<double>() << " after recovery\n"
+            << "  per frame: median " << r["timing"]["total"]["median_ms"].get<double>() << " ms, p95 "
+            << r["timing"]["total"]["p95_ms"].get<double>() << " ms (sensing period 100 ms)\n";
 }
 
 // sensing on its own thread, processing on this one; writes the outputs into out. With a world,
@@ -153,17 +141,13 @@ nlohmann::json scoreRun(const Pipeline& pipeline, const eval::VoxelTruth& truth,
 void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out,
                  const sim::World* world) {
   Pipeline pipeline(source.calibration(), config);
-  eval::VoxelTruth voxel_truth(config.voxel_map.voxel_size);
-  std::vector<Point3> true_path;
+  eval::RunTruth truth(config.voxel_map.voxel_size);
   app::BoundedQueue<SensorFrame> queue(4);
   std::exception_ptr sensing_error;
   std::thread sensing([&] {
     try {
       while (auto f = source.next()) {
-        if (world && f->truth) {
-          voxel_truth.add(*f, source.calibration().vehicle_from_lidar);
-          for (const auto& p : f->truth->poses) true_path.push_back(p.world_from_vehicle.translation());
-        }
+        if (world && f->truth) eval::addFrameTruth(truth, *f, source.calibration(), 10);
         if (!queue.push(std::move(f->sensors))) break;
       }
     } catch (...) {
@@ -212,10 +196,15 @@ void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const 
             << "per frame: median " << median(total) << " ms in all, " << median(seg) << " ms ground segmentation\n";
   for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
   nlohmann::json report;
-  report["frames"] = pipeline.records().size();
-  report["voxels"] = pipeline.map().size();
+  if (world && truth.voxels.size() > 0) {
+    report = eval::evaluateRun(pipeline, truth, *world);
+    printScorecard(report);
+  } else {
+    report["frames"] = pipeline.records().size();
+    report["voxels"] = pipeline.map().size();
+    report["timing"] = eval::timingJson(pipeline.records());
+  }
   report["config"] = nlohmann::json::parse(app::pipelineConfigToJson(config));
-  if (world && voxel_truth.size() > 0) report.update(scoreRun(pipeline, voxel_truth, *world, true_path));
   io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
   std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json into "
             << fs::absolute(out).string() << "\n";

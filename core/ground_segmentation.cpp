@@ -202,7 +202,14 @@ class GroundHeight {
 }  // namespace
 
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& cfg) {
+  SegmentationResult out = segmentGroundLabels(map, cfg);
   auto& voxels = map.voxels();
+  for (std::size_t i = 0; i < voxels.size(); ++i) voxels[i].label = out.refined[i] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+  return out;
+}
+
+SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmentationConfig& cfg) {
+  const auto& voxels = map.voxels();
   const std::size_t n = voxels.size();
   SegmentationResult out;
   out.rough.assign(n, 0);
@@ -248,7 +255,6 @@ SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& 
     out.iterations = solveIcm(p, out.refined, cfg.icm_iterations, cfg.threads);
   }
   out.energy_refined = gmrfEnergy(p, out.refined);
-  for (std::size_t i = 0; i < n; ++i) voxels[i].label = out.refined[i] ? VoxelLabel::Ground : VoxelLabel::NonGround;
   return out;
 }
 

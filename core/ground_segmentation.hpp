@@ -75,6 +75,8 @@ struct SegmentationResult {
   int tiles = 0;                      // local histograms used (1 for global)
 };
 
+// Segments every voxel of the map; the map is not changed.
+SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmentationConfig& config);
 // Segments every voxel of the map and writes the refined labels into the voxels.
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& config);
 

@@ -68,6 +68,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
   const auto start = Clock::now();
   FrameRecord rec;
   rec.frame = frame.index;
+  rec.time = frame.sweep.start_time;
   const std::string id = "frame " + std::to_string(frame.index) + ": ";
 
   // pose and de-skew

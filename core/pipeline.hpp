@@ -29,6 +29,7 @@ struct PipelineConfig {
 // Per-frame record: stage times [ms] and sizes.
 struct FrameRecord {
   int frame = 0;
+  double time = 0;  // [s] sweep start
   double pose_ms = 0, voxel_ms = 0, mesh_ms = 0, segmentation_ms = 0, boundary_ms = 0, estimation_ms = 0, total_ms = 0;
   std::size_t points = 0, new_voxels = 0, voxels = 0;
   int estimated_vertices = 0;
@@ -51,6 +52,7 @@ class Pipeline {
   const std::vector<std::string>& warnings() const { return warnings_; }
   const PoseEstimator& poses() const { return poses_; }
   const RigCalibration& calibration() const { return calibration_; }
+  const PipelineConfig& config() const { return config_; }
   // the last frame's boundary images (empty if it had no image)
   const BoundaryImages& lastBoundaries() const { return last_boundaries_; }
   int lastBoundaryFrame() const { return last_boundary_frame_; }

@@ -48,6 +48,11 @@ TruthLabel VoxelTruth::label(const VoxelIndex& index) const {
   return it->second.first >= it->second.second ? TruthLabel::Ground : TruthLabel::NonGround;
 }
 
+std::pair<std::uint32_t, std::uint32_t> VoxelTruth::votes(const VoxelIndex& index) const {
+  auto it = votes_.find(key(index));
+  return it == votes_.end() ? std::pair<std::uint32_t, std::uint32_t>{0, 0} : it->second;
+}
+
 CellTruth cellTruth(const sim::World& world, double x, double y, double cell) {
   CellTruth c;
   c.top = -std::numeric_limits<double>::infinity();

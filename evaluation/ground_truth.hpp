@@ -22,6 +22,8 @@ class VoxelTruth {
   // Adds a frame's points with their true classes (frames without truth are ignored).
   void add(const rig::RigFrame& frame, const Pose& vehicle_from_lidar);
   TruthLabel label(const VoxelIndex& index) const;
+  // true points in a voxel: (ground, non-ground)
+  std::pair<std::uint32_t, std::uint32_t> votes(const VoxelIndex& index) const;
   std::size_t size() const { return votes_.size(); }
 
  private:

@@ -1,6 +1,7 @@
 #include "sim/world.hpp"
 
 #include "rig/file_io.hpp"
+#include "sim/hfield_ray.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -81,6 +82,7 @@ void World::finishLoading() {
     top = std::max(top, data_->geom_xpos[3 * g + 2] + model_->geom_rbound[g]);
   }
   top_z_ = top + 10.0;
+  caster_ = std::make_unique<RayCaster>(model_, data_, robot_body_);
 }
 
 double World::terrainHeight(double x, double y) const {
@@ -88,7 +90,7 @@ double World::terrainHeight(double x, double y) const {
   const int type = model_->geom_type[terrain_geom_];
   mjtNum d = -1;
   if (type == mjGEOM_HFIELD) {
-    d = mj_rayHfield(model_, data_, terrain_geom_, pnt, down);
+    d = rayHfield(model_, data_, terrain_geom_, pnt, down);
   } else {
     d = mju_rayGeom(data_->geom_xpos + 3 * terrain_geom_, data_->geom_xmat + 9 * terrain_geom_,
                     model_->geom_size + 3 * terrain_geom_, pnt, down, type);
@@ -97,11 +99,9 @@ double World::terrainHeight(double x, double y) const {
 }
 
 double World::surfaceHeight(double x, double y, int* geom) const {
-  const mjtNum pnt[3] = {x, y, top_z_}, down[3] = {0, 0, -1};
-  int id = -1;
-  const mjtNum d = mj_ray(model_, data_, pnt, down, nullptr, 1, robot_body_, &id);
-  if (geom) *geom = id;
-  return d < 0 ? std::numeric_limits<double>::quiet_NaN() : top_z_ - d;
+  const RayHit hit = caster_->cast(Eigen::Vector3d(x, y, top_z_), Eigen::Vector3d(0, 0, -1));
+  if (geom) *geom = hit.geom;
+  return hit.geom < 0 ? std::numeric_limits<double>::quiet_NaN() : top_z_ - hit.distance;
 }
 
 }  // namespace terrain::sim

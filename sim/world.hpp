@@ -3,6 +3,7 @@
 // every sensor takes what it needs from here.
 
 #include "scenes/scene_truth.hpp"
+#include "sim/ray_caster.hpp"
 
 #include <mujoco/mujoco.h>
 
@@ -55,6 +56,7 @@ class World {
   int robot_body_ = -1;
   int terrain_geom_ = -1;
   double top_z_ = 1000;
+  std::unique_ptr<RayCaster> caster_;  // every geom but the robot's
 };
 
 }  // namespace terrain::sim

@@ -1,0 +1,239 @@
+#include "evaluation/report.hpp"
+
+#include "core/camera_model.hpp"
+#include "evaluation/baselines.hpp"
+#include "evaluation/metrics.hpp"
+#include "evaluation/scoring.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+namespace terrain::eval {
+
+using nlohmann::json;
+
+namespace {
+
+json errorJson(const ErrorStats& e) {
+  return {{"mae_m", e.mae}, {"rmse_m", e.rmse}, {"bias_m", e.bias}, {"variance_m2", e.variance}, {"cells", e.count}};
+}
+
+json binaryJson(const BinaryScores& b) {
+  return {{"precision", b.precision}, {"recall", b.recall}, {"f1", b.f1}, {"iou", b.iou},
+          {"tp", b.tp}, {"fp", b.fp}, {"fn", b.fn}, {"tn", b.tn}};
+}
+
+// per voxel and per point (each voxel weighted by the true points in it)
+json segmentationJson(const VoxelMap& map, const std::vector<std::uint8_t>& ground, const VoxelTruth& truth) {
+  const SegmentationScores voxel = scoreVoxels(map, ground, truth);
+  std::size_t tp = 0, fp = 0, fn = 0, tn = 0;
+  for (std::size_t i = 0; i < map.size() && i < ground.size(); ++i) {
+    const auto [g, n] = truth.votes(map.voxels()[i].index);
+    if (ground[i]) tp += g, fp += n;
+    else fn += g, tn += n;
+  }
+  json j = binaryJson(voxel.scores);
+  j["per_point"] = binaryJson(binaryScores(tp, fp, fn, tn));
+  return j;
+}
+
+std::vector<Point3> voxelPoints(const VoxelMap& map) {
+  std::vector<Point3> pts;
+  pts.reserve(map.size());
+  for (const auto& v : map.voxels()) {
+    pts.emplace_back((v.index.x() + 0.5) * map.voxelSize(), (v.index.y() + 0.5) * map.voxelSize(), v.height);
+  }
+  return pts;
+}
+
+}  // namespace
+
+void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibration& calibration, int camera_every) {
+  if (!frame.truth) return;
+  truth.voxels.add(frame, calibration.vehicle_from_lidar);
+  for (const auto& p : frame.truth->poses) truth.path.push_back(p.world_from_vehicle.translation());
+  if (camera_every > 0 && frame.sensors.index % camera_every == 0 && frame.sensors.image &&
+      !frame.truth->segmentation.empty()) {
+    CameraTruthFrame c;
+    c.frame = frame.sensors.index;
+    c.rgb = frame.sensors.image->rgb;
+    c.segmentation = frame.truth->segmentation;
+    c.world_from_camera = interpolatePose(frame.truth->poses, frame.sensors.image->time) * calibration.vehicle_from_camera;
+    truth.cameras.push_back(std::move(c));
+  }
+}
+
+BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, double cell, const sim::World& world,
+                                  const CameraIntrinsics& k, const CameraTruthFrame& f, int tolerance) {
+  BoundaryCoverage out;
+  const cv::Mat& seg = f.segmentation;
+  auto isObject = [&](int geom) {
+    const auto c = world.geomClass(geom);
+    return c == scenes::GeomClass::Building || c == scenes::GeomClass::Crown || c == scenes::GeomClass::Trunk;
+  };
+  cv::Mat boundary(seg.size(), CV_8UC1, cv::Scalar(0));
+  for (int v = 1; v < seg.rows; ++v) {
+    for (int u = 0; u < seg.cols; ++u) {
+      const int g = seg.at<std::uint16_t>(v, u) - 1, above = seg.at<std::uint16_t>(v - 1, u) - 1;
+      if (isObject(g) && g != above) boundary.at<std::uint8_t>(v, u) = 255;
+    }
+  }
+  out.boundary_pixels = static_cast<std::size_t>(cv::countNonZero(boundary));
+  if (out.boundary_pixels == 0) return out;
+  const Pose camera_from_world = f.world_from_camera.inverse();
+  cv::Mat before(seg.size(), CV_8UC1, cv::Scalar(0)), after = before.clone();
+  for (const auto& m : mesh.vertices()) {
+    const double x = (m.cell.x() + 0.5) * cell, y = (m.cell.y() + 0.5) * cell;
+    for (auto [height, target] : {std::pair{static_cast<double>(m.sensed_height), &before}, {static_cast<double>(m.height()), &after}}) {
+      const auto px = project(k, camera_from_world * Point3(x, y, height));
+      if (px) target->at<std::uint8_t>(static_cast<int>(px->y()), static_cast<int>(px->x())) = 255;
+    }
+  }
+  const cv::Mat grow = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * tolerance + 1, 2 * tolerance + 1));
+  cv::dilate(before, before, grow);
+  cv::dilate(after, after, grow);
+  out.before = cv::countNonZero(boundary & before) / static_cast<double>(out.boundary_pixels);
+  out.after = cv::countNonZero(boundary & after) / static_cast<double>(out.boundary_pixels);
+  return out;
+}
+
+json timingJson(const std::vector<FrameRecord>& records) {
+  std::map<std::string, std::vector<double>> stages;
+  for (const auto& r : records) {
+    stages["pose"].push_back(r.pose_ms);
+    stages["voxel_map"].push_back(r.voxel_ms);
+    stages["terrain_mesh"].push_back(r.mesh_ms);
+    stages["ground_segmentation"].push_back(r.segmentation_ms);
+    stages["boundary_detection"].push_back(r.boundary_ms);
+    stages["boundary_estimation"].push_back(r.estimation_ms);
+    stages["total"].push_back(r.total_ms);
+  }
+  json j;
+  for (const auto& [name, values] : stages) {
+    const Percentiles p = percentiles(values);
+    j[name] = {{"median_ms", p.median}, {"p95_ms", p.p95}};
+  }
+  std::size_t over = 0;
+  for (double t : stages["total"]) over += t > 100.0;
+  j["frames_over_sensing_period"] = over;
+  return j;
+}
+
+json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world) {
+  json r;
+  const VoxelMap& map = pipeline.map();
+  const auto& seg = pipeline.segmentation();
+  r["frames"] = pipeline.records().size();
+  r["voxels"] = map.size();
+
+  // ground segmentation: histogram, both GMRF solvers, the baselines
+  GroundSegmentationConfig other = pipeline.config().ground;
+  const bool icm = other.solver == GroundSegmentationConfig::Solver::Icm;
+  other.solver = icm ? GroundSegmentationConfig::Solver::MinCut : GroundSegmentationConfig::Solver::Icm;
+  const SegmentationResult alternative = segmentGroundLabels(map, other);
+  const SegmentationResult& by_icm = icm ? seg : alternative;
+  const SegmentationResult& by_cut = icm ? alternative : seg;
+  json& g = r["ground_segmentation"];
+  g["histogram"] = segmentationJson(map, seg.rough, truth.voxels);
+  g["gmrf_icm"] = segmentationJson(map, by_icm.refined, truth.voxels);
+  g["gmrf_icm"]["energy"] = by_icm.energy_refined;
+  g["gmrf_mincut"] = segmentationJson(map, by_cut.refined, truth.voxels);
+  g["gmrf_mincut"]["energy"] = by_cut.energy_refined;
+  g["histogram"]["energy"] = seg.energy_rough;
+  const std::vector<Point3> pts = voxelPoints(map);
+  std::vector<Point3> vehicle;
+  for (const auto& rec : pipeline.records()) vehicle.push_back(pipeline.poses().worldFromVehicle(rec.time).translation());
+  g["fixed_band"] = segmentationJson(map, groundByFixedBand(pts, vehicle, pipeline.config().ground.delta), truth.voxels);
+  g["ransac_plane"] = segmentationJson(map, groundByRansacPlane(pts, 0.2), truth.voxels);
+  g["morphological_filter"] = segmentationJson(map, groundByMorphologicalFilter(pts, MorphologicalFilterConfig{}), truth.voxels);
+
+  // heights of object vertices, before and after recovery
+  const HeightScores h = scoreHeights(pipeline.mesh(), map.voxelSize(), world, truth.path);
+  json& hr = r["height_recovery"];
+  hr["before"] = errorJson(h.before);
+  hr["after"] = errorJson(h.after);
+  hr["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
+  hr["raised_terrain_cells"] = h.raised_terrain_cells;
+  for (const auto& [band, e] : h.by_band) hr["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  for (const auto& [id, e] : h.by_object) hr["by_object"][id] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+
+  // height baselines on the height map: sensed only, inpainted, recovered
+  r["height_baselines"] = json::object();
+  {
+    const auto& verts = pipeline.mesh().vertices();
+    if (!verts.empty()) {
+      int x0 = verts[0].cell.x(), y0 = verts[0].cell.y(), x1 = x0, y1 = y0;
+      for (const auto& v : verts) x0 = std::min(x0, v.cell.x()), y0 = std::min(y0, v.cell.y()), x1 = std::max(x1, v.cell.x()), y1 = std::max(y1, v.cell.y());
+      cv::Mat sensed(y1 - y0 + 1, x1 - x0 + 1, CV_32FC1, cv::Scalar(std::nanf(""))), recovered = sensed.clone();
+      for (const auto& v : verts) {
+        sensed.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.sensed_height;
+        recovered.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.height();
+      }
+      const cv::Mat inpainted = inpaintHeights(sensed, 10);
+      // object cells: the cells of object footprints inside the mapped area
+      std::vector<double> e_sensed, e_inpaint, e_recovered;
+      std::size_t cells = 0, c_sensed = 0, c_inpaint = 0;
+      const double cs = map.voxelSize();
+      for (int r0 = 0; r0 < sensed.rows; r0 += 2) {
+        for (int c0 = 0; c0 < sensed.cols; c0 += 2) {
+          const double x = (x0 + c0 + 0.5) * cs, y = (y0 + r0 + 0.5) * cs;
+          const float si = inpainted.at<float>(r0, c0);
+          if (!std::isfinite(si) && !std::isfinite(sensed.at<float>(r0, c0))) continue;
+          int geom = -1;
+          const double top = world.surfaceHeight(x, y, &geom);
+          const auto cls = world.geomClass(geom);
+          if (cls != scenes::GeomClass::Building && cls != scenes::GeomClass::Crown && cls != scenes::GeomClass::Trunk) continue;
+          ++cells;
+          if (std::isfinite(sensed.at<float>(r0, c0))) {
+            ++c_sensed;
+            e_sensed.push_back(sensed.at<float>(r0, c0) - top);
+            e_recovered.push_back(recovered.at<float>(r0, c0) - top);
+          }
+          if (std::isfinite(si)) ++c_inpaint, e_inpaint.push_back(si - top);
+        }
+      }
+      auto entry = [&](const std::vector<double>& e, std::size_t covered) {
+        json j = errorJson(errorStats(e));
+        j["coverage"] = cells ? static_cast<double>(covered) / cells : 0.0;
+        return j;
+      };
+      r["height_baselines"]["sensed_only"] = entry(e_sensed, c_sensed);
+      r["height_baselines"]["inpainting"] = entry(e_inpaint, c_inpaint);
+      r["height_baselines"]["boundary_estimation"] = entry(e_recovered, c_sensed);
+      r["height_baselines"]["object_cells"] = cells;
+    }
+  }
+
+  // boundary coverage over the kept camera frames
+  double before = 0, after = 0;
+  std::size_t pixels = 0;
+  json frames = json::array();
+  for (const auto& c : truth.cameras) {
+    const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), map.voxelSize(), world, pipeline.calibration().camera, c, 3);
+    frames.push_back({{"frame", c.frame}, {"before", b.before}, {"after", b.after}, {"boundary_pixels", b.boundary_pixels}});
+    before += b.before * b.boundary_pixels;
+    after += b.after * b.boundary_pixels;
+    pixels += b.boundary_pixels;
+  }
+  r["boundary_coverage"] = pixels ? after / pixels : 0.0;
+  r["boundary_coverage_before"] = pixels ? before / pixels : 0.0;
+  r["boundary_coverage_frames"] = frames;
+  r["timing"] = timingJson(pipeline.records());
+  return r;
+}
+
+std::map<std::string, double> flattenMetrics(const json& report) {
+  std::map<std::string, double> out;
+  std::function<void(const json&, const std::string&)> walk = [&](const json& j, const std::string& prefix) {
+    if (j.is_object()) {
+      for (auto it = j.begin(); it != j.end(); ++it) walk(it.value(), prefix.empty() ? it.key() : prefix + "." + it.key());
+    } else if (j.is_number()) {
+      out[prefix] = j.get<double>();
+    }
+  };
+  walk(report, "");
+  return out;
+}
+
+}  // namespace terrain::eval

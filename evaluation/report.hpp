@@ -1,0 +1,58 @@
+#pragma once
+// The evaluation of a run: every metric of the paper's method beside the baselines, as JSON with
+// stable field names (report.json), from the pipeline's final state and the truth gathered on the
+// side while it ran.
+
+#include "core/pipeline.hpp"
+#include "evaluation/ground_truth.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace terrain::eval {
+
+// A camera frame kept for boundary coverage: its truth segmentation and true camera pose.
+struct CameraTruthFrame {
+  int frame = 0;
+  cv::Mat rgb;           // for the overlay in the HTML report
+  cv::Mat segmentation;  // CV_16UC1 geom id + 1
+  Pose world_from_camera = Pose::Identity();
+};
+
+// Truth gathered beside a run.
+struct RunTruth {
+  explicit RunTruth(double voxel_size) : voxels(voxel_size) {}
+  VoxelTruth voxels;
+  std::vector<Point3> path;  // true vehicle positions
+  std::vector<CameraTruthFrame> cameras;
+};
+
+// Adds one frame's truth (every `camera_every`-th frame keeps its camera truth).
+void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibration& calibration, int camera_every);
+
+struct BoundaryCoverage {
+  double before = 0, after = 0;  // share of true top-boundary pixels reproduced
+  std::size_t boundary_pixels = 0;
+};
+
+// Boundary coverage of one camera frame: the true top-boundary pixels are object pixels (building,
+// trunk, crown) whose upper neighbour belongs to another object, the ground or the sky; one is
+// reproduced when a vertex of the mesh over an object cell, projected at its height into the image,
+// lands within `tolerance` pixels of it. Computed for the sensed heights (before) and the
+// recovered heights (after).
+BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, double voxel_size, const sim::World& world,
+                                  const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame, int tolerance);
+
+// The full report. Re-runs the segmentation with both solvers on the final map, runs the baselines.
+nlohmann::json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world);
+
+// Flattens a report into "a.b.c" -> number for the numeric leaves.
+std::map<std::string, double> flattenMetrics(const nlohmann::json& report);
+
+// Timing summary of a pipeline's records: stage -> (median, p95) [ms].
+nlohmann::json timingJson(const std::vector<FrameRecord>& records);
+
+}  // namespace terrain::eval
