@@ -7,6 +7,7 @@
 #include "app/outputs.hpp"
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
+#include "evaluation/regression.hpp"
 #include "core/pipeline.hpp"
 #include "evaluation/report.hpp"
 #include "rig/dataset.hpp"
@@ -138,8 +139,8 @@ void printScorecard(const nlohmann::json& r) {
 
 // sensing on its own thread, processing on this one; writes the outputs into out. With a world,
 // the ground truth the source carries is scored (it never reaches the pipeline).
-void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out,
-                 const sim::World* world) {
+nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out,
+                           const sim::World* world, bool quiet = false) {
   Pipeline pipeline(source.calibration(), config);
   eval::RunTruth truth(config.voxel_map.voxel_size);
   app::BoundedQueue<SensorFrame> queue(4);
@@ -157,7 +158,7 @@ void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const 
   });
   const fs::path boundary_dir = out / "boundaries";
   fs::create_directories(boundary_dir);
-  app::Progress progress("reconstruct", source.frameCount());
+  app::Progress progress(quiet ? "" : "reconstruct", source.frameCount());
   int done = 0, last_written = -1;
   try {
     while (auto frame = queue.pop()) {
@@ -170,7 +171,8 @@ void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const 
         app::writeBoundaryImages(boundary_dir, last_written, pipeline.lastBoundaries(),
                                  last_written == frame->index ? frame->image->rgb : cv::Mat());
       }
-      progress.update(++done);
+      ++done;
+      if (!quiet) progress.update(done);
     }
   } catch (...) {
     queue.close();
@@ -189,16 +191,18 @@ void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const 
   const auto& s = pipeline.segmentation();
   std::size_t ground = 0;
   for (auto g : s.refined) ground += g;
-  std::cout << std::fixed << std::setprecision(1) << "frames " << pipeline.records().size() << ", voxels "
+  if (!quiet) std::cout << std::fixed << std::setprecision(1) << "frames " << pipeline.records().size() << ", voxels "
             << pipeline.map().size() << " (" << ground << " ground), mesh vertices " << pipeline.mesh().vertices().size()
             << " (" << recovered << " raised by boundary estimation)\n"
             << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
             << "per frame: median " << median(total) << " ms in all, " << median(seg) << " ms ground segmentation\n";
-  for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
+  if (!quiet) {
+    for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
+  }
   nlohmann::json report;
   if (world && truth.voxels.size() > 0) {
     report = eval::evaluateRun(pipeline, truth, *world);
-    printScorecard(report);
+    if (!quiet) printScorecard(report);
   } else {
     report["frames"] = pipeline.records().size();
     report["voxels"] = pipeline.map().size();
@@ -206,8 +210,23 @@ void reconstruct(rig::SensorSource& source, const PipelineConfig& config, const 
   }
   report["config"] = nlohmann::json::parse(app::pipelineConfigToJson(config));
   io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
-  std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json into "
+  if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json into "
             << fs::absolute(out).string() << "\n";
+  return report;
+}
+
+// generate a scenario's scene into out/scene, simulate and reconstruct it into out
+nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int frames, const sim::SimConfig& sim_cfg,
+                           const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet) {
+  io::prepareOutputDir(out, force);
+  scenes::SceneConfig scene_cfg;
+  scene_cfg.type = type;
+  scene_cfg.seed = seed;
+  const fs::path scene_path = out / "scene" / (type + "_" + std::to_string(seed) + ".xml");
+  scenes::writeScene(scenes::generateScene(scene_cfg), scene_path, force);
+  auto world = std::make_shared<sim::World>(scene_path);
+  sim::SimulatedRig rig(world, sim_cfg, frames);
+  return reconstruct(rig, pipe_cfg, out, world.get(), quiet);
 }
 
 int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool force) {
@@ -326,6 +345,18 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   run->add_option("--threads", run_sim.threads, "lidar simulation threads, 0 = all cores")->capture_default_str();
 
+  // terrain regress
+  CLI::App* reg = app.add_subcommand("regress", "run a suite of scenarios and compare every metric with its baseline");
+  fs::path reg_suite, reg_baseline, reg_write, reg_junit, reg_out;
+  bool reg_force = false;
+  reg->add_option("--suite", reg_suite, "suite YAML: scenarios (type, seed, frames) and metrics with tolerances")->required();
+  reg->add_option("--baseline", reg_baseline, "baseline JSON to compare with; any metric past its tolerance fails the run (exit 1)");
+  reg->add_option("--write-baseline", reg_write, "run the suite and write its metrics as the new baseline (the only way baselines change)");
+  reg->add_option("--junit", reg_junit, "also write the comparison as JUnit XML");
+  reg->add_option("--out", reg_out, "directory for the scenarios' outputs (default out/regress-SUITE)");
+  reg->add_flag("--force", reg_force, "overwrite an existing --write-baseline file");
+  addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver);
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
@@ -345,16 +376,30 @@ int main(int argc, char** argv) {
     }
     if (run->parsed()) {
       applyChoices(pipe_cfg, histogram, solver);
-      io::prepareOutputDir(run_out, run_force);
-      scenes::SceneConfig scene_cfg_run;
-      scene_cfg_run.type = run_scenario;
-      scene_cfg_run.seed = run_seed;
-      const fs::path scene_path = run_out / "scene" / (run_scenario + "_" + std::to_string(run_seed) + ".xml");
-      scenes::writeScene(scenes::generateScene(scene_cfg_run), scene_path, run_force);
-      auto world = std::make_shared<sim::World>(scene_path);
-      sim::SimulatedRig rig(world, run_sim, run_frames);
-      reconstruct(rig, pipe_cfg, run_out, world.get());
+      runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false);
       return 0;
+    }
+    if (reg->parsed()) {
+      applyChoices(pipe_cfg, histogram, solver);
+      const eval::Suite suite = eval::loadSuite(reg_suite);
+      if (!reg_write.empty() && !reg_baseline.empty()) throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
+      if (reg_write.empty() && reg_baseline.empty()) throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");
+      const fs::path work = reg_out.empty() ? fs::path("out") / ("regress-" + suite.name) : reg_out;
+      std::map<std::string, std::map<std::string, double>> results;
+      for (const auto& sc : suite.scenarios) {
+        std::cerr << "regress: " << sc.id() << " ...\n";
+        results[sc.id()] = eval::flattenMetrics(
+            runScenario(sc.type, sc.seed, sc.frames, run_sim, pipe_cfg, work / sc.id(), true, true));
+      }
+      if (!reg_write.empty()) {
+        eval::writeBaseline(reg_write, suite, results, reg_force);
+        std::cout << "wrote baseline " << reg_write.string() << " for " << results.size() << " scenarios\n";
+        return 0;
+      }
+      const eval::RegressionResult res = eval::compare(suite, eval::loadBaseline(reg_baseline), results);
+      eval::printTable(std::cout, res);
+      if (!reg_junit.empty()) io::writeFileAtomic(reg_junit, eval::junitXml(suite, res), true);
+      return res.regressions > 0 ? 1 : 0;
     }
   } catch (const io::InputError& e) {
     std::cerr << "terrain: error: " << e.what() << "\n";

@@ -15,6 +15,7 @@ class Progress {
       : what_(std::move(what)), total_(total), tty_(isatty(fileno(stderr)) != 0), start_(Clock::now()) {}
 
   void update(int done) {
+    if (what_.empty()) return;
     const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
     const double rate = elapsed > 0 ? done / elapsed : 0.0;
     const double left = rate > 0 ? (total_ - done) / rate : 0.0;

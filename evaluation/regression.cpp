@@ -1,0 +1,152 @@
+#include "evaluation/regression.hpp"
+
+#include "rig/file_io.hpp"
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace terrain::eval {
+
+namespace fs = std::filesystem;
+
+Suite loadSuite(const fs::path& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(io::readFile(path));
+  } catch (const YAML::Exception& e) {
+    throw io::InputError(path.string() + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+  auto fail = [&](const YAML::Node& n, const std::string& what) {
+    throw io::InputError(path.string() + ":" + std::to_string(n.Mark().line + 1) + ": " + what);
+  };
+  if (!root.IsMap()) throw io::InputError(path.string() + ": expected a map with 'scenarios' and 'metrics'");
+  Suite s;
+  s.name = root["name"] ? root["name"].as<std::string>() : path.stem().string();
+  const int default_frames = root["frames"] ? root["frames"].as<int>() : 10;
+  if (!root["scenarios"] || !root["scenarios"].IsSequence() || root["scenarios"].size() == 0) {
+    throw io::InputError(path.string() + ": 'scenarios' must be a non-empty list");
+  }
+  for (const auto& n : root["scenarios"]) {
+    ScenarioSpec sc;
+    try {
+      if (!n["type"]) fail(n, "scenario without 'type'");
+      sc.type = n["type"].as<std::string>();
+      sc.frames = n["frames"] ? n["frames"].as<int>() : default_frames;
+      if (n["seeds"]) {
+        for (const auto& seed : n["seeds"]) {
+          sc.seed = seed.as<std::uint64_t>();
+          s.scenarios.push_back(sc);
+        }
+        continue;
+      }
+      sc.seed = n["seed"] ? n["seed"].as<std::uint64_t>() : 1;
+    } catch (const YAML::Exception& e) {
+      fail(n, "bad scenario (" + e.msg + ")");
+    }
+    if (sc.frames < 1 || sc.frames > 10000) fail(n, "frames must be in [1, 10000]");
+    s.scenarios.push_back(sc);
+  }
+  if (!root["metrics"] || !root["metrics"].IsMap() || root["metrics"].size() == 0) {
+    throw io::InputError(path.string() + ": 'metrics' must map metric names to {better, tolerance}");
+  }
+  for (const auto& kv : root["metrics"]) {
+    MetricSpec m;
+    m.name = kv.first.as<std::string>();
+    const YAML::Node v = kv.second;
+    if (!v["better"] || !v["tolerance"]) fail(v, "metric '" + m.name + "' needs 'better' (higher/lower) and 'tolerance'");
+    const std::string better = v["better"].as<std::string>();
+    if (better != "higher" && better != "lower") fail(v, "metric '" + m.name + "': better must be higher or lower");
+    m.higher_is_better = better == "higher";
+    m.tolerance = v["tolerance"].as<double>();
+    if (!(m.tolerance >= 0)) fail(v, "metric '" + m.name + "': tolerance must be >= 0");
+    s.metrics.push_back(m);
+  }
+  return s;
+}
+
+Results loadBaseline(const fs::path& path) {
+  Results r;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(io::readFile(path));
+    for (auto sc = j.at("scenarios").begin(); sc != j.at("scenarios").end(); ++sc) {
+      for (auto m = sc.value().begin(); m != sc.value().end(); ++m) r[sc.key()][m.key()] = m.value().get<double>();
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw io::InputError(path.string() + ": not a baseline file (" + e.what() + ")");
+  }
+  return r;
+}
+
+void writeBaseline(const fs::path& path, const Suite& suite, const Results& results, bool force) {
+  nlohmann::json j;
+  j["suite"] = suite.name;
+  j["note"] = "written by 'terrain regress --write-baseline'; guarded metrics only";
+  for (const auto& [scenario, metrics] : results) {
+    for (const auto& m : suite.metrics) {
+      auto it = metrics.find(m.name);
+      if (it != metrics.end()) j["scenarios"][scenario][m.name] = it->second;
+    }
+  }
+  io::writeFileAtomic(path, j.dump(1) + "\n", force);
+}
+
+RegressionResult compare(const Suite& suite, const Results& baseline, const Results& results) {
+  RegressionResult out;
+  for (const auto& sc : suite.scenarios) {
+    for (const auto& m : suite.metrics) {
+      Comparison c;
+      c.scenario = sc.id();
+      c.metric = m.name;
+      c.tolerance = m.tolerance;
+      c.higher_is_better = m.higher_is_better;
+      const auto b = baseline.find(c.scenario);
+      const auto r = results.find(c.scenario);
+      if (b == baseline.end() || r == results.end() || !b->second.count(m.name) || !r->second.count(m.name)) {
+        c.missing = true;
+        c.regressed = true;  // an unguarded metric is a failure: the baseline must be refreshed explicitly
+      } else {
+        c.baseline = b->second.at(m.name);
+        c.value = r->second.at(m.name);
+        const double worse = m.higher_is_better ? c.baseline - c.value : c.value - c.baseline;
+        c.regressed = !(worse <= m.tolerance);
+      }
+      out.regressions += c.regressed;
+      out.rows.push_back(c);
+    }
+  }
+  return out;
+}
+
+void printTable(std::ostream& out, const RegressionResult& r) {
+  out << std::left << std::setw(24) << "scenario" << std::setw(46) << "metric" << std::right << std::setw(11) << "baseline"
+      << std::setw(11) << "value" << std::setw(11) << "tolerance" << "  status\n";
+  for (const auto& c : r.rows) {
+    out << std::left << std::setw(24) << c.scenario << std::setw(46) << c.metric << std::right << std::fixed
+        << std::setprecision(4) << std::setw(11) << c.baseline << std::setw(11) << c.value << std::setw(11) << c.tolerance
+        << "  " << (c.missing ? "MISSING" : c.regressed ? "REGRESSED" : "ok") << "\n";
+  }
+  out << r.regressions << " regressions in " << r.rows.size() << " checks\n";
+}
+
+std::string junitXml(const Suite& suite, const RegressionResult& r) {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"" << suite.name << "\" tests=\"" << r.rows.size()
+    << "\" failures=\"" << r.regressions << "\">\n";
+  for (const auto& c : r.rows) {
+    x << "  <testcase classname=\"" << c.scenario << "\" name=\"" << c.metric << "\">";
+    if (c.regressed) {
+      x << "<failure message=\"" << (c.missing ? "no baseline or value" : "past tolerance") << "\">baseline " << c.baseline
+        << ", value " << c.value << ", tolerance " << c.tolerance << " (" << (c.higher_is_better ? "higher" : "lower")
+        << " is better)</failure>";
+    }
+    x << "</testcase>\n";
+  }
+  x << "</testsuite>\n";
+  return x.str();
+}
+
+}  // namespace terrain::eval

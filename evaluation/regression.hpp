@@ -1,0 +1,61 @@
+#pragma once
+// Regression checks: a suite of scenarios (terrain type x seed x frames) and the metrics to guard,
+// each with the direction that is better and a tolerance; a baseline of stored values; the
+// comparison, as a table and as JUnit XML.
+
+#include <filesystem>
+#include <map>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace terrain::eval {
+
+struct ScenarioSpec {
+  std::string type;
+  std::uint64_t seed = 1;
+  int frames = 10;
+  std::string id() const { return type + "_s" + std::to_string(seed) + "_f" + std::to_string(frames); }
+};
+
+struct MetricSpec {
+  std::string name;       // flattened report field, e.g. ground_segmentation.gmrf_icm.f1
+  bool higher_is_better = true;
+  double tolerance = 0;   // allowed worsening, in the metric's unit
+};
+
+struct Suite {
+  std::string name;
+  std::vector<ScenarioSpec> scenarios;
+  std::vector<MetricSpec> metrics;
+};
+
+// Reads a suite YAML; throws io::InputError naming the file, line and field.
+Suite loadSuite(const std::filesystem::path& path);
+
+using Results = std::map<std::string, std::map<std::string, double>>;  // scenario -> metric -> value
+
+// Reads and writes baselines (JSON); writing refuses to replace a file unless force.
+Results loadBaseline(const std::filesystem::path& path);
+void writeBaseline(const std::filesystem::path& path, const Suite& suite, const Results& results, bool force);
+
+struct Comparison {
+  std::string scenario, metric;
+  double baseline = 0, value = 0, tolerance = 0;
+  bool higher_is_better = true;
+  bool missing = false;  // no baseline or no value
+  bool regressed = false;
+};
+
+struct RegressionResult {
+  std::vector<Comparison> rows;
+  int regressions = 0;
+};
+
+// Compares every guarded metric of every scenario with the baseline.
+RegressionResult compare(const Suite& suite, const Results& baseline, const Results& results);
+
+void printTable(std::ostream& out, const RegressionResult& result);
+std::string junitXml(const Suite& suite, const RegressionResult& result);
+
+}  // namespace terrain::eval
