@@ -9,7 +9,9 @@
 #include "app/progress.hpp"
 #include "evaluation/regression.hpp"
 #include "core/pipeline.hpp"
+#include "evaluation/kitti.hpp"
 #include "evaluation/report.hpp"
+#include "rig/kitti.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
 #include "scenes/scene_generator.hpp"
@@ -357,6 +359,16 @@ int main(int argc, char** argv) {
   reg->add_flag("--force", reg_force, "overwrite an existing --write-baseline file");
   addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver);
 
+  // terrain kitti
+  CLI::App* kitti = app.add_subcommand("kitti", "score ground segmentation on real KITTI HDL-64E scans with SemanticKITTI labels");
+  std::vector<fs::path> kitti_scans;
+  fs::path kitti_json;
+  double kitti_height = 1.73;
+  kitti->add_option("--scan", kitti_scans, "KITTI .bin scan(s); labels are read from the .label file beside each")->required();
+  kitti->add_option("--sensor-height", kitti_height, "lidar height above the road [m]")->capture_default_str();
+  kitti->add_option("--json", kitti_json, "also write the scores as JSON");
+  addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver);
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
@@ -377,6 +389,26 @@ int main(int argc, char** argv) {
     if (run->parsed()) {
       applyChoices(pipe_cfg, histogram, solver);
       runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false);
+      return 0;
+    }
+    if (kitti->parsed()) {
+      applyChoices(pipe_cfg, histogram, solver);
+      nlohmann::json all;
+      std::cout << std::fixed << std::setprecision(3) << "scan          method                 F1     IoU    precision recall\n";
+      for (const auto& scan_path : kitti_scans) {
+        const rig::KittiScan scan = rig::readKittiScan(scan_path);
+        fs::path label_path = scan_path;
+        label_path.replace_extension(".label");
+        const auto labels = rig::readSemanticKittiLabels(label_path, scan.points.size());
+        const auto j = eval::scoreKittiScan(scan.points, labels, pipe_cfg.voxel_map, pipe_cfg.ground, kitti_height);
+        for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
+          std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22) << m << std::right
+                    << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  " << j[m]["precision"].get<double>()
+                    << "     " << j[m]["recall"].get<double>() << "\n";
+        }
+        all[scan_path.stem().string()] = j;
+      }
+      if (!kitti_json.empty()) io::writeFileAtomic(kitti_json, all.dump(1) + "\n", false);
       return 0;
     }
     if (reg->parsed()) {

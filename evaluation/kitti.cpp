@@ -1,0 +1,67 @@
+#include "evaluation/kitti.hpp"
+
+#include "evaluation/baselines.hpp"
+#include "evaluation/metrics.hpp"
+#include "rig/kitti.hpp"
+
+#include <chrono>
+
+namespace terrain::eval {
+
+using nlohmann::json;
+
+std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
+                                      const GroundSegmentationConfig& ground, double* milliseconds) {
+  const auto t0 = std::chrono::steady_clock::now();
+  VoxelMap map(voxels);
+  map.insert(points, 0);
+  const SegmentationResult r = segmentGroundLabels(map, ground);
+  std::vector<std::uint8_t> out(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::int64_t v = map.find(map.indexOf(points[i]));
+    if (v >= 0) out[i] = r.refined[v];
+  }
+  if (milliseconds) *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
+                    const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground, double sensor_height) {
+  std::vector<bool> truth(points.size()), skip(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    truth[i] = rig::isKittiGround(labels[i]);
+    skip[i] = rig::isKittiIgnored(labels[i]);
+  }
+  auto score = [&](const std::vector<std::uint8_t>& pred) {
+    const BinaryScores s = binaryScores(std::vector<bool>(pred.begin(), pred.end()), truth, skip);
+    return json{{"precision", s.precision}, {"recall", s.recall}, {"f1", s.f1}, {"iou", s.iou}};
+  };
+  json j;
+  j["points"] = points.size();
+  GroundSegmentationConfig g = ground;
+  double ms = 0;
+  g.solver = GroundSegmentationConfig::Solver::Icm;
+  j["gmrf_icm"] = score(segmentScan(points, voxels, g, &ms));
+  j["gmrf_icm"]["time_ms"] = ms;
+  g.solver = GroundSegmentationConfig::Solver::MinCut;
+  j["gmrf_mincut"] = score(segmentScan(points, voxels, g, &ms));
+  j["gmrf_mincut"]["time_ms"] = ms;
+  // the histogram alone: rough labels of the same map
+  {
+    VoxelMap map(voxels);
+    map.insert(points, 0);
+    const SegmentationResult r = segmentGroundLabels(map, ground);
+    std::vector<std::uint8_t> rough(points.size(), 0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const std::int64_t v = map.find(map.indexOf(points[i]));
+      if (v >= 0) rough[i] = r.rough[v];
+    }
+    j["histogram"] = score(rough);
+  }
+  j["fixed_band"] = score(groundByFixedBand(points, {Point3(0, 0, -sensor_height)}, ground.delta));
+  j["ransac_plane"] = score(groundByRansacPlane(points, 0.2));
+  j["morphological_filter"] = score(groundByMorphologicalFilter(points, MorphologicalFilterConfig{}));
+  return j;
+}
+
+}  // namespace terrain::eval
