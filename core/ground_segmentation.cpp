@@ -6,8 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
-#include <unordered_map>
 
 namespace terrain {
 
@@ -97,67 +95,95 @@ namespace {
 // h1 as a function of position, from one histogram or from tiles
 class GroundHeight {
  public:
-  GroundHeight(const VoxelMap& map, const GroundSegmentationConfig& cfg) : cfg_(cfg) {
+  GroundHeight(const VoxelMap& map, const GroundSegmentationConfig& cfg) : cfg_(cfg), cell_(map.voxelSize()) {
     const auto& voxels = map.voxels();
-    if (cfg.histogram == GroundSegmentationConfig::Histogram::Global) {
+    if (cfg.histogram == GroundSegmentationConfig::Histogram::Global || voxels.empty()) {
       std::vector<double> h;
       h.reserve(voxels.size());
       for (const auto& v : voxels) h.push_back(v.height);
       global_ = histogramPeak(h, cfg.bin_size);
       return;
     }
-    // lowest voxel per column, and every voxel, grouped by tile
-    const double cell = map.voxelSize();
-    std::map<std::pair<int, int>, std::vector<std::uint32_t>> tiles;
-    std::unordered_map<std::uint64_t, std::uint32_t> lowest;  // column -> voxel id
-    for (std::uint32_t i = 0; i < voxels.size(); ++i) {
-      const auto& v = voxels[i];
-      const double x = (v.index.x() + 0.5) * cell, y = (v.index.y() + 0.5) * cell;
-      tiles[tileOf(x, y)].push_back(i);
-      const std::uint64_t col = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(v.index.x())) << 32) |
-                                static_cast<std::uint32_t>(v.index.y());
-      auto it = lowest.find(col);
-      if (it == lowest.end() || voxels[it->second].height > v.height) lowest[col] = i;
+    // tiles of k x k columns on a dense grid over the map's extent
+    k_ = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell_)));
+    int x0 = voxels[0].index.x(), x1 = x0, y0 = voxels[0].index.y(), y1 = y0;
+    for (const auto& v : voxels) {
+      x0 = std::min(x0, v.index.x()), x1 = std::max(x1, v.index.x());
+      y0 = std::min(y0, v.index.y()), y1 = std::max(y1, v.index.y());
     }
-    std::map<std::pair<int, int>, std::vector<std::uint32_t>> lowest_by_tile;
-    for (const auto& [col, id] : lowest) {
-      const auto& v = voxels[id];
-      lowest_by_tile[tileOf((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell)].push_back(id);
+    tx0_ = floorDiv(x0, k_), ty0_ = floorDiv(y0, k_);
+    nx_ = floorDiv(x1, k_) - tx0_ + 1, ny_ = floorDiv(y1, k_) - ty0_ + 1;
+    const std::size_t tiles = static_cast<std::size_t>(nx_) * ny_;
+    // voxel ids grouped by tile (counting sort)
+    std::vector<std::uint32_t> start(tiles + 1, 0), ids(voxels.size());
+    for (const auto& v : voxels) ++start[tileOf(v.index) + 1];
+    for (std::size_t t = 0; t < tiles; ++t) start[t + 1] += start[t];
+    {
+      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+      for (std::uint32_t i = 0; i < voxels.size(); ++i) ids[fill[tileOf(voxels[i].index)]++] = i;
     }
-    for (const auto& [tile, ids] : tiles) {
-      // the tile's window: itself and its neighbours
-      std::vector<Point3> ground_candidates;
-      std::vector<std::uint32_t> window;
-      for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-        for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-          const std::pair<int, int> t{tile.first + dx, tile.second + dy};
-          if (auto it = lowest_by_tile.find(t); it != lowest_by_tile.end()) {
-            for (auto id : it->second) {
-              const auto& v = voxels[id];
-              ground_candidates.emplace_back((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell, v.height);
-            }
-          }
-          if (auto it = tiles.find(t); it != tiles.end()) window.insert(window.end(), it->second.begin(), it->second.end());
+    // the lowest voxel of every column, per tile
+    std::vector<std::vector<Point3>> lowest(tiles);
+    tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
+      if (start[t] == start[t + 1]) return;
+      std::vector<float> low(static_cast<std::size_t>(k_) * k_, std::numeric_limits<float>::infinity());
+      const int cx = (static_cast<int>(t % nx_) + tx0_) * k_, cy = (static_cast<int>(t / nx_) + ty0_) * k_;
+      for (std::uint32_t j = start[t]; j < start[t + 1]; ++j) {
+        const auto& v = voxels[ids[j]];
+        float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k_ + (v.index.x() - cx)];
+        l = std::min(l, v.height);
+      }
+      for (int r = 0; r < k_; ++r) {
+        for (int c = 0; c < k_; ++c) {
+          const float l = low[static_cast<std::size_t>(r) * k_ + c];
+          if (std::isfinite(l)) lowest[t].emplace_back((cx + c + 0.5) * cell_, (cy + r + 0.5) * cell_, l);
         }
       }
-      Plane plane = fitPlane(ground_candidates);
+    });
+    // per tile: a plane through the window's column minima, then the histogram of heights above it
+    planes_.assign(tiles, Plane{});
+    has_plane_.assign(tiles, 0);
+    tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
+      if (start[t] == start[t + 1]) return;
+      const int tx = static_cast<int>(t % nx_), ty = static_cast<int>(t / nx_);
+      std::vector<Point3> candidates;
       std::vector<double> residual;
-      residual.reserve(window.size());
-      for (auto id : window) {
-        const auto& v = voxels[id];
-        residual.push_back(v.height - plane.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell));
+      for (int pass = 0; pass < 2; ++pass) {
+        for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+          for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+            const int ux = tx + dx, uy = ty + dy;
+            if (ux < 0 || uy < 0 || ux >= nx_ || uy >= ny_) continue;
+            const std::size_t u = static_cast<std::size_t>(uy) * nx_ + ux;
+            if (pass == 0) {
+              candidates.insert(candidates.end(), lowest[u].begin(), lowest[u].end());
+              continue;
+            }
+            for (std::uint32_t j = start[u]; j < start[u + 1]; ++j) {
+              const auto& v = voxels[ids[j]];
+              residual.push_back(v.height - planes_[t].at((v.index.x() + 0.5) * cell_, (v.index.y() + 0.5) * cell_));
+            }
+          }
+        }
+        if (pass == 0) planes_[t] = fitPlane(std::move(candidates));
       }
-      plane.c += histogramPeak(residual, cfg.bin_size);
-      planes_[tile] = plane;
-    }
+      planes_[t].c += histogramPeak(residual, cfg.bin_size);
+      has_plane_[t] = 1;
+    });
   }
 
   double at(double x, double y) const {
     if (planes_.empty()) return global_;
-    auto it = planes_.find(tileOf(x, y));
-    return it == planes_.end() ? global_ : it->second.at(x, y);
+    const int tx = floorDiv(static_cast<int>(std::floor(x / cell_)), k_) - tx0_;
+    const int ty = floorDiv(static_cast<int>(std::floor(y / cell_)), k_) - ty0_;
+    if (tx < 0 || ty < 0 || tx >= nx_ || ty >= ny_) return global_;
+    const std::size_t t = static_cast<std::size_t>(ty) * nx_ + tx;
+    return has_plane_[t] ? planes_[t].at(x, y) : global_;
   }
-  int tiles() const { return planes_.empty() ? 1 : static_cast<int>(planes_.size()); }
+  int tiles() const {
+    int n = 0;
+    for (auto h : has_plane_) n += h;
+    return planes_.empty() ? 1 : n;
+  }
 
  private:
   struct Plane {
@@ -165,24 +191,32 @@ class GroundHeight {
     double at(double x, double y) const { return a * x + b * y + c; }
   };
 
-  std::pair<int, int> tileOf(double x, double y) const {
-    return {static_cast<int>(std::floor(x / cfg_.tile_size)), static_cast<int>(std::floor(y / cfg_.tile_size))};
+  static int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+  std::size_t tileOf(const VoxelIndex& i) const {
+    return static_cast<std::size_t>(floorDiv(i.y(), k_) - ty0_) * nx_ + (floorDiv(i.x(), k_) - tx0_);
   }
 
-  // least squares with two rounds that drop points far above the plane (objects) and far below
+  // least squares (normal equations, centred) in rounds that drop points far from the plane
   static Plane fitPlane(std::vector<Point3> pts) {
     Plane plane;
     for (int round = 0; round < 3 && pts.size() >= 3; ++round) {
-      Eigen::MatrixXd a(pts.size(), 3);
-      Eigen::VectorXd b(pts.size());
-      for (std::size_t i = 0; i < pts.size(); ++i) {
-        a.row(i) << pts[i].x(), pts[i].y(), 1.0;
-        b[i] = pts[i].z();
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const auto& p : pts) mean += p;
+      mean /= static_cast<double>(pts.size());
+      Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
+      Eigen::Vector2d atb = Eigen::Vector2d::Zero();
+      double zmin = std::numeric_limits<double>::infinity();
+      for (const auto& p : pts) {
+        const Eigen::Vector2d d(p.x() - mean.x(), p.y() - mean.y());
+        ata += d * d.transpose();
+        atb += d * (p.z() - mean.z());
+        zmin = std::min(zmin, p.z());
       }
-      const Eigen::Vector3d s = a.colPivHouseholderQr().solve(b);
-      plane = {s[0], s[1], s[2]};
+      Eigen::Vector2d ab = Eigen::Vector2d::Zero();
+      if (std::abs(ata.determinant()) > 1e-9) ab = ata.ldlt().solve(atb);
+      plane = {ab.x(), ab.y(), mean.z() - ab.x() * mean.x() - ab.y() * mean.y()};
       // a steeper plane than 35 degrees is not terrain: fall back to level
-      if (std::hypot(plane.a, plane.b) > 0.7) plane = {0, 0, b.minCoeff()};
+      if (std::hypot(plane.a, plane.b) > 0.7) plane = {0, 0, zmin};
       std::vector<Point3> kept;
       for (const auto& p : pts) {
         if (std::abs(p.z() - plane.at(p.x(), p.y())) < 1.0 - 0.3 * round) kept.push_back(p);
@@ -195,8 +229,11 @@ class GroundHeight {
   }
 
   GroundSegmentationConfig cfg_;
+  double cell_;
   double global_ = 0;
-  std::map<std::pair<int, int>, Plane> planes_;
+  int k_ = 1, tx0_ = 0, ty0_ = 0, nx_ = 0, ny_ = 0;
+  std::vector<Plane> planes_;
+  std::vector<std::uint8_t> has_plane_;
 };
 
 }  // namespace
@@ -235,15 +272,25 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
     p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
     p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
   }
-  // neighbours at L1 distance 1: look up +x, +y, +z of every voxel
+  // neighbours at L1 distance 1: look up +x, +y, +z of every voxel, each voxel writing its own
+  // three slots, so the edge list does not depend on the thread count
+  std::vector<std::int64_t> next(3 * n, -1);
+  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      for (int axis = 0; axis < 3; ++axis) {
+        VoxelIndex j = voxels[i].index;
+        j[axis] += 1;
+        next[3 * i + axis] = map.find(j);
+      }
+    });
+  });
+  p.edges.reserve(3 * n);
   for (std::uint32_t i = 0; i < n; ++i) {
-    const auto& v = voxels[i];
     for (int axis = 0; axis < 3; ++axis) {
-      VoxelIndex j = v.index;
-      j[axis] += 1;
-      const std::int64_t k = map.find(j);
+      const std::int64_t k = next[3 * i + axis];
       if (k < 0) continue;
-      const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(v.height - voxels[k].height));
+      const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(voxels[i].height - voxels[k].height));
       p.edges.push_back({i, static_cast<std::uint32_t>(k), w});
     }
   }

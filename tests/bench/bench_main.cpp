@@ -1,0 +1,236 @@
+// Benchmarks for the performance targets (README, "Performance"). Run through scripts/bench, which
+// builds Release; the table at the end gives each figure's median, its target and, where there is
+// one, the ratio against a baseline measured in the same run.
+#include "core/ground_segmentation.hpp"
+#include "core/random.hpp"
+#include "evaluation/kitti.hpp"
+#include "rig/kitti.hpp"
+#include "scenes/scene_generator.hpp"
+#include "sim/camera.hpp"
+#include "sim/lidar.hpp"
+#include "sim/ray_caster.hpp"
+#include "sim/world.hpp"
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <unordered_map>
+
+namespace {
+
+using namespace terrain;
+namespace fs = std::filesystem;
+
+// the urban scene of the performance target: about 300 geoms on heightfield terrain
+const sim::World& urbanWorld() {
+  static std::unique_ptr<sim::World> world = [] {
+    const fs::path dir = fs::temp_directory_path() / "terrain_bench";
+    fs::create_directories(dir);
+    scenes::writeScene(scenes::generateScene(scenes::SceneConfig{"urban", 1}), dir / "urban_1.xml", true);
+    return std::make_unique<sim::World>(dir / "urban_1.xml");
+  }();
+  return *world;
+}
+
+// one HDL-64E revolution of rays from the robot's start: 64 lasers x 2083 firings
+struct Rays {
+  std::vector<Vector3> origin, dir;
+};
+const Rays& sweepRays() {
+  static Rays rays = [] {
+    const auto& w = urbanWorld();
+    const rig::LaserCalibration lasers = rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+    const Eigen::Vector2d start = w.truth().path.front();
+    const Vector3 sensor(start.x(), start.y(), w.terrainHeight(start.x(), start.y()) + 1.8);
+    Rays r;
+    for (int j = 0; j < 2083; ++j) {
+      for (const auto& l : lasers.lasers) {
+        Vector3 o, d;
+        sim::LidarSimulator::beam(l, 2 * M_PI * j / 2083, o, d);
+        r.origin.push_back(sensor + o);
+        r.dir.push_back(d);
+      }
+    }
+    return r;
+  }();
+  return rays;
+}
+
+void BM_LidarRays_MjRay(benchmark::State& state) {
+  const auto& w = urbanWorld();
+  const sim::RayCaster caster(w.model(), w.data(), w.robotBody());
+  const Rays& rays = sweepRays();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    // a slice of the sweep per iteration: brute force is slow
+    for (int k = 0; k < 2000; ++k, i = (i + 97) % rays.dir.size()) benchmark::DoNotOptimize(caster.castReference(rays.origin[i], rays.dir[i]));
+  }
+  state.SetItemsProcessed(state.iterations() * 2000);
+}
+BENCHMARK(BM_LidarRays_MjRay)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_LidarRays_Accelerated(benchmark::State& state) {
+  const auto& w = urbanWorld();
+  const sim::RayCaster caster(w.model(), w.data(), w.robotBody());
+  const Rays& rays = sweepRays();
+  const int threads = static_cast<int>(state.range(0));
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  for (auto _ : state) {
+    std::vector<int> hits(rays.dir.size());
+    tbb::parallel_for(std::size_t{0}, rays.dir.size(), [&](std::size_t k) { hits[k] = caster.cast(rays.origin[k], rays.dir[k]).geom; });
+    benchmark::DoNotOptimize(hits.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(rays.dir.size()));
+}
+BENCHMARK(BM_LidarRays_Accelerated)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// a voxel map of about 1.8 M voxels: 1.2 M ground voxels of rolling terrain, walls, noise
+VoxelMap& bigMap() {
+  static std::unique_ptr<VoxelMap> map = [] {
+    auto m = std::make_unique<VoxelMap>(VoxelMapConfig{0.2});
+    std::vector<Point3> pts;
+    Random rng(1);
+    for (int x = 0; x < 1300; ++x) {
+      for (int y = 0; y < 1300; ++y) {
+        const double px = x * 0.2 + 0.1, py = y * 0.2 + 0.1;
+        pts.emplace_back(px, py, 0.5 * std::sin(px / 15) + 0.3 * std::cos(py / 9) + 0.01 * rng.normal());
+        // walls every 20 m, 15 voxels high
+        if (x % 100 == 0 || y % 100 == 0) {
+          for (int z = 1; z < 5; ++z) pts.emplace_back(px, py, 0.5 * std::sin(px / 15) + 0.3 * std::cos(py / 9) + z * 0.2);
+        }
+      }
+    }
+    m->insert(pts, 0);
+    return m;
+  }();
+  return *map;
+}
+
+void BM_Segmentation(benchmark::State& state) {
+  VoxelMap& map = bigMap();
+  GroundSegmentationConfig cfg;
+  cfg.solver = state.range(0) == 0 ? GroundSegmentationConfig::Solver::Icm : GroundSegmentationConfig::Solver::MinCut;
+  for (auto _ : state) benchmark::DoNotOptimize(segmentGroundLabels(map, cfg).refined.data());
+  state.counters["voxels"] = static_cast<double>(map.size());
+  state.counters["bytes_per_voxel"] = static_cast<double>(map.memoryBytes()) / map.size();
+}
+BENCHMARK(BM_Segmentation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// the straightforward way: a std::unordered_map from voxel key to height and label, the global
+// histogram, ICM with hash look-ups for every neighbour in every sweep
+void BM_Segmentation_NaiveHashMap(benchmark::State& state) {
+  const VoxelMap& map = bigMap();
+  for (auto _ : state) {
+    std::unordered_map<std::uint64_t, std::pair<float, std::uint8_t>> voxels;
+    auto key = [](const VoxelIndex& i) {
+      return (static_cast<std::uint64_t>(i.x() + (1 << 20)) << 42) | (static_cast<std::uint64_t>(i.y() + (1 << 20)) << 21) |
+             static_cast<std::uint64_t>(i.z() + (1 << 20));
+    };
+    std::vector<double> heights;
+    for (const auto& v : map.voxels()) voxels[key(v.index)] = {v.height, 0}, heights.push_back(v.height);
+    const double h1 = histogramPeak(heights, 0.1);
+    for (auto& [k, v] : voxels) v.second = std::abs(v.first - h1) <= 0.3;
+    std::unordered_map<std::uint64_t, std::uint8_t> rough;
+    for (auto& [k, v] : voxels) rough[k] = v.second;
+    for (int sweep = 0; sweep < 5; ++sweep) {
+      for (const auto& vx : map.voxels()) {
+        auto& self = voxels[key(vx.index)];
+        double cg = rough[key(vx.index)] ? -2 : 2, cn = -cg;
+        for (int axis = 0; axis < 3; ++axis) {
+          for (int s = -1; s <= 1; s += 2) {
+            VoxelIndex j = vx.index;
+            j[axis] += s;
+            auto it = voxels.find(key(j));
+            if (it == voxels.end()) continue;
+            const double w = 0.6 + 0.6 * std::exp(-std::abs(self.first - it->second.first));
+            cg += it->second.second ? -w : w;
+            cn += it->second.second ? w : -w;
+          }
+        }
+        self.second = cg < cn;
+      }
+    }
+    benchmark::DoNotOptimize(voxels.size());
+  }
+}
+BENCHMARK(BM_Segmentation_NaiveHashMap)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+void BM_CameraRender(benchmark::State& state) {
+  const auto& w = urbanWorld();
+  sim::CameraConfig cfg;
+  sim::CameraRenderer cam(w, cfg);
+  const Eigen::Vector2d start = w.truth().path.front();
+  Pose pose = Pose::Identity();
+  pose.linear().col(0) = Vector3(0, -1, 0);
+  pose.linear().col(1) = Vector3(0, 0, -1);
+  pose.linear().col(2) = Vector3(1, 0, 0);
+  pose.translation() = Vector3(start.x(), start.y(), w.terrainHeight(start.x(), start.y()) + 1.6);
+  for (auto _ : state) benchmark::DoNotOptimize(cam.render(pose).rgb.data);
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_CameraRender)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_KittiScanSegmentation(benchmark::State& state) {
+  static const rig::KittiScan scan = rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
+  for (auto _ : state) benchmark::DoNotOptimize(eval::segmentScan(scan.points, VoxelMapConfig{}, GroundSegmentationConfig{}).data());
+}
+BENCHMARK(BM_KittiScanSegmentation)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// keeps the median of every benchmark for the summary table
+class Collector : public benchmark::ConsoleReporter {
+ public:
+  std::map<std::string, Run> medians;
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const auto& r : runs) {
+      if (r.run_type == Run::RT_Aggregate && r.aggregate_name == "median") medians[r.benchmark_name().substr(0, r.benchmark_name().rfind('_'))] = r;
+      if (r.run_type == Run::RT_Iteration && r.repetitions <= 1) medians[r.benchmark_name()] = r;
+    }
+  }
+};
+
+double ms(const benchmark::BenchmarkReporter::Run& r) { return r.GetAdjustedRealTime() * (r.time_unit == benchmark::kMillisecond ? 1.0 : 1e-6); }
+double perSecond(const benchmark::BenchmarkReporter::Run& r) {
+  auto it = r.counters.find("items_per_second");
+  return it == r.counters.end() ? 0.0 : static_cast<double>(it->second);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  Collector c;
+  benchmark::RunSpecifiedBenchmarks(&c);
+  auto get = [&](const std::string& prefix) -> const benchmark::BenchmarkReporter::Run* {
+    for (const auto& [name, run] : c.medians) {
+      if (name.rfind(prefix, 0) == 0) return &run;
+    }
+    return nullptr;
+  };
+  std::printf("\n%-44s %14s %16s %12s\n", "figure", "median", "target", "vs baseline");
+  const auto* ref = get("BM_LidarRays_MjRay");
+  for (const char* name : {"BM_LidarRays_Accelerated/1/", "BM_LidarRays_Accelerated/2/"}) {
+    if (const auto* r = get(name)) {
+      std::printf("%-44s %10.0f k/s %16s %11.1fx\n", (std::string("lidar rays, ") + name[25] + " thread(s)").c_str(),
+                  perSecond(*r) / 1e3, ">= 1333 k/s", ref ? perSecond(*r) / perSecond(*ref) : 0.0);
+    }
+  }
+  if (ref) std::printf("%-44s %10.0f k/s %16s %12s\n", "lidar rays, brute-force mj_ray (baseline)", perSecond(*ref) / 1e3, "", "1.0x");
+  const auto* naive = get("BM_Segmentation_NaiveHashMap");
+  if (const auto* r = get("BM_Segmentation/0")) {
+    std::printf("%-44s %11.1f ms %16s %11.1fx\n", ("segmentation ICM, " + std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels").c_str(), ms(*r), "<= 50 ms", naive ? ms(*naive) / ms(*r) : 0.0);
+    std::printf("%-44s %11.1f B %16s %12s\n", "voxel map memory per voxel", static_cast<double>(r->counters.at("bytes_per_voxel")), "<= 64 B", "");
+  }
+  if (const auto* r = get("BM_Segmentation/1")) std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation min-cut, same map", ms(*r), "<= 250 ms", naive ? ms(*naive) / ms(*r) : 0.0);
+  if (naive) std::printf("%-44s %11.1f ms %16s %12s\n", "segmentation, naive hash map (baseline)", ms(*naive), "", "1.0x");
+  if (const auto* r = get("BM_CameraRender")) std::printf("%-44s %10.1f f/s %16s %12s\n", "camera 640x480 (RGB, depth, segmentation)", perSecond(*r), ">= 10 f/s", "");
+  if (const auto* r = get("BM_KittiScanSegmentation")) std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation", ms(*r), "<= 10 ms", "");
+  return 0;
+}
