@@ -19,10 +19,7 @@ std::uint64_t hashKey(std::uint64_t k) {
 
 }  // namespace
 
-VoxelMap::VoxelMap(const VoxelMapConfig& config) : size_(config.voxel_size) {
-  keys_.assign(1 << 16, 0);
-  slots_.assign(1 << 16, 0);
-}
+VoxelMap::VoxelMap(const VoxelMapConfig& config) : size_(config.voxel_size) { slots_.assign(1 << 16, kEmpty); }
 
 std::uint64_t VoxelMap::pack(const VoxelIndex& i) {
   return ((static_cast<std::uint64_t>(i.x() + kOffset) & kMask) << (2 * kBits)) |
@@ -38,26 +35,21 @@ VoxelIndex VoxelMap::indexOf(const Point3& p) const {
 Point3 VoxelMap::centreOf(const VoxelIndex& i) const { return (i.cast<double>().array() + 0.5) * size_; }
 
 std::int64_t VoxelMap::find(const VoxelIndex& index) const {
-  const std::uint64_t key = pack(index) + 1;
-  const std::size_t mask = keys_.size() - 1;
-  for (std::size_t s = hashKey(key) & mask;; s = (s + 1) & mask) {
-    if (keys_[s] == 0) return -1;
-    if (keys_[s] == key) return slots_[s];
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t s = hashKey(pack(index)) & mask;; s = (s + 1) & mask) {
+    if (slots_[s] == kEmpty) return -1;
+    if (voxels_[slots_[s]].index == index) return slots_[s];
   }
 }
 
 void VoxelMap::grow() {
-  std::vector<std::uint64_t> keys(keys_.size() * 2, 0);
-  std::vector<std::uint32_t> slots(keys.size(), 0);
-  const std::size_t mask = keys.size() - 1;
-  for (std::size_t s = 0; s < keys_.size(); ++s) {
-    if (keys_[s] == 0) continue;
-    std::size_t t = hashKey(keys_[s]) & mask;
-    while (keys[t] != 0) t = (t + 1) & mask;
-    keys[t] = keys_[s];
-    slots[t] = slots_[s];
+  std::vector<std::uint32_t> slots(slots_.size() * 2, kEmpty);
+  const std::size_t mask = slots.size() - 1;
+  for (std::uint32_t id = 0; id < voxels_.size(); ++id) {
+    std::size_t t = hashKey(pack(voxels_[id].index)) & mask;
+    while (slots[t] != kEmpty) t = (t + 1) & mask;
+    slots[t] = id;
   }
-  keys_.swap(keys);
   slots_.swap(slots);
 }
 
@@ -69,13 +61,11 @@ std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t fr
     const Point3& p = points[k];
     if (!p.allFinite() || p.cwiseAbs().maxCoeff() >= limit) continue;
     const VoxelIndex index = indexOf(p);
-    const std::uint64_t key = pack(index) + 1;
-    if (2 * (voxels_.size() + 1) > keys_.size()) grow();
-    const std::size_t mask = keys_.size() - 1;
-    std::size_t s = hashKey(key) & mask;
-    while (keys_[s] != 0 && keys_[s] != key) s = (s + 1) & mask;
-    if (keys_[s] == 0) {
-      keys_[s] = key;
+    if (2 * (voxels_.size() + 1) > slots_.size()) grow();
+    const std::size_t mask = slots_.size() - 1;
+    std::size_t s = hashKey(pack(index)) & mask;
+    while (slots_[s] != kEmpty && voxels_[slots_[s]].index != index) s = (s + 1) & mask;
+    if (slots_[s] == kEmpty) {
       slots_[s] = static_cast<std::uint32_t>(voxels_.size());
       Voxel v;
       v.index = index;
@@ -103,8 +93,8 @@ std::vector<std::uint32_t> VoxelMap::takeNewVoxels() {
 }
 
 std::size_t VoxelMap::memoryBytes() const {
-  return voxels_.capacity() * sizeof(Voxel) + keys_.capacity() * sizeof(std::uint64_t) +
-         slots_.capacity() * sizeof(std::uint32_t) + new_voxels_.capacity() * sizeof(std::uint32_t);
+  return voxels_.capacity() * sizeof(Voxel) + slots_.capacity() * sizeof(std::uint32_t) +
+         new_voxels_.capacity() * sizeof(std::uint32_t);
 }
 
 }  // namespace terrain

@@ -59,8 +59,8 @@ class VoxelMap {
 
   double size_;
   std::vector<Voxel> voxels_;
-  std::vector<std::uint64_t> keys_;   // hash slots: packed index + 1 (0 = empty)
-  std::vector<std::uint32_t> slots_;  // voxel id per slot
+  static constexpr std::uint32_t kEmpty = 0xffffffffu;
+  std::vector<std::uint32_t> slots_;  // open-addressing hash table of voxel ids; the key is the voxel's index
   std::vector<std::uint32_t> new_voxels_;
 };
 
