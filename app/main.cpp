@@ -4,6 +4,7 @@
 //   reconstruct       run the pipeline over a recorded dataset
 //   run               generate a scene, simulate and reconstruct in one go
 #include "app/bounded_queue.hpp"
+#include "app/html_report.hpp"
 #include "app/outputs.hpp"
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
@@ -205,6 +206,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   if (world && truth.voxels.size() > 0) {
     report = eval::evaluateRun(pipeline, truth, *world);
     if (!quiet) printScorecard(report);
+    io::writeFileAtomic(out / "report.html", app::htmlReport(report, pipeline, truth, *world, "terrain reconstruction report"), true);
   } else {
     report["frames"] = pipeline.records().size();
     report["voxels"] = pipeline.map().size();
@@ -212,7 +214,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   }
   report["config"] = nlohmann::json::parse(app::pipelineConfigToJson(config));
   io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
-  if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json into "
+  if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json, report.html into "
             << fs::absolute(out).string() << "\n";
   return report;
 }
