@@ -54,6 +54,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.max_distance", num(c.estimation.max_distance)},
       {"estimation.max_height", num(c.estimation.max_height)},
       {"estimation.top_margin", integer(c.estimation.top_margin)},
+      {"estimation.fusion_quantile", num(c.estimation.fusion_quantile)},
   };
 }
 
@@ -89,6 +90,8 @@ void validate(const PipelineConfig& c) {
   }
   require(c.estimation.max_distance > 0, "estimation.max_distance", c.estimation.max_distance, "> 0 m");
   require(c.estimation.max_height > 0, "estimation.max_height", c.estimation.max_height, "> 0 m");
+  require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
+          c.estimation.fusion_quantile, "[0, 1]");
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
@@ -137,7 +140,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                    {"threshold", c.boundary.threshold}, {"erode", {c.boundary.erode_width, c.boundary.erode_height}},
                    {"dilate", {c.boundary.dilate_width, c.boundary.dilate_height}}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
-                     {"top_margin", c.estimation.top_margin}};
+                     {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile}};
   return j.dump();
 }
 

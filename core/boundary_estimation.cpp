@@ -34,7 +34,7 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
-    mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates);
+    mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
     ++stats.estimated;
   }
   return stats;

@@ -16,7 +16,8 @@ struct BoundaryEstimationConfig {
   double max_distance = 100.0;   // [m] vertices farther from the camera are not estimated
   double max_height = 60.0;      // [m] above the sensed top: larger estimates are rejected
   int top_margin = 2;            // [px] a boundary this close to the image top may be cut: skipped
-  std::size_t max_estimates = 15;  // estimates kept per vertex for the median
+  std::size_t max_estimates = 15;  // estimates kept per vertex
+  double fusion_quantile = 0.5;    // the fused height is this quantile of the kept estimates (0.5: median)
 };
 
 struct BoundaryEstimationStats {

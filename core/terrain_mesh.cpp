@@ -1,6 +1,7 @@
 #include "core/terrain_mesh.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace terrain {
 
@@ -32,13 +33,14 @@ void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& 
   }
 }
 
-void TerrainMesh::addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates) {
+void TerrainMesh::addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates, double quantile) {
   MeshVertex& m = vertices_[vertex];
   if (m.estimates.size() >= max_estimates) m.estimates.erase(m.estimates.begin());
   m.estimates.push_back(height);
   std::vector<float> sorted = m.estimates;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  m.recovered_height = sorted[sorted.size() / 2];
+  const auto k = static_cast<std::size_t>(std::lround(quantile * (sorted.size() - 1)));
+  std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+  m.recovered_height = sorted[k];
 }
 
 std::vector<std::array<std::uint32_t, 3>> TerrainMesh::triangles() const {

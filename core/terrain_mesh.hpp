@@ -36,9 +36,9 @@ class TerrainMesh {
   // counter-clockwise seen from above.
   std::vector<std::array<std::uint32_t, 3>> triangles() const;
 
-  // Adds a recovered-height estimate to a vertex; the fused value is the median of the last
-  // max_estimates estimates.
-  void addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates);
+  // Adds a recovered-height estimate to a vertex; the fused value is the `quantile` (0.5: median)
+  // of the last max_estimates estimates.
+  void addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates, double quantile = 0.5);
 
  private:
   static std::uint64_t key(const CellIndex& c) {
