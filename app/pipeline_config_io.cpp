@@ -1,23 +1,23 @@
 #include "app/pipeline_config_io.hpp"
 
 #include "rig/file_io.hpp"
+#include "rig/settings_io.hpp"
 
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include <functional>
 #include <map>
-#include <sstream>
 
 namespace terrain::app {
 
 namespace {
 
-using Setter = std::function<void(const YAML::Node&)>;
+using io::Setter;
+constexpr auto require = io::requireInRange;
 
 std::map<std::string, Setter> fields(PipelineConfig& c) {
-  auto num = [](double& f) { return Setter([&f](const YAML::Node& n) { f = n.as<double>(); }); };
-  auto integer = [](int& f) { return Setter([&f](const YAML::Node& n) { f = n.as<int>(); }); };
+  const auto num = io::numberSetter;
+  const auto integer = io::integerSetter;
   return {
       {"segment_every", integer(c.segment_every)},
       {"pose.heading_baseline", num(c.pose.heading_baseline)},
@@ -58,14 +58,6 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
   };
 }
 
-void require(bool ok, const std::string& field, double value, const std::string& range) {
-  if (!ok) {
-    std::ostringstream s;
-    s << field << " = " << value << " is out of range (allowed: " << range << ")";
-    throw io::InputError(s.str());
-  }
-}
-
 }  // namespace
 
 void validate(const PipelineConfig& c) {
@@ -95,34 +87,7 @@ void validate(const PipelineConfig& c) {
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(io::readFile(path));
-  } catch (const YAML::Exception& e) {
-    throw io::InputError(path.string() + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
-  }
-  if (root.IsNull()) return;
-  if (!root.IsMap()) throw io::InputError(path.string() + ": expected a map of sections (pose, voxel_map, ground, boundary, estimation)");
-  const auto setters = fields(c);
-  auto apply = [&](const std::string& key, const YAML::Node& value) {
-    auto it = setters.find(key);
-    if (it == setters.end()) {
-      throw io::InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": unknown setting '" + key + "'");
-    }
-    try {
-      it->second(value);
-    } catch (const YAML::Exception& e) {
-      throw io::InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key + "' has a bad value (" + e.msg + ")");
-    }
-  };
-  for (const auto& kv : root) {
-    const std::string key = kv.first.as<std::string>();
-    if (kv.second.IsMap()) {
-      for (const auto& inner : kv.second) apply(key + "." + inner.first.as<std::string>(), inner.second);
-    } else {
-      apply(key, kv.second);
-    }
-  }
+  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation");
 }
 
 std::string pipelineConfigToJson(const PipelineConfig& c) {

@@ -10,17 +10,27 @@ namespace terrain::eval {
 
 using nlohmann::json;
 
+namespace {
+
+// each point takes the label of the voxel it fell in
+std::vector<std::uint8_t> pointLabels(const VoxelMap& map, const std::vector<Point3>& points,
+                                      const std::vector<std::uint8_t>& voxel_labels) {
+  std::vector<std::uint8_t> out(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::int64_t v = map.find(map.indexOf(points[i]));
+    if (v >= 0) out[i] = voxel_labels[v];
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
                                       const GroundSegmentationConfig& ground, double* milliseconds) {
   const auto t0 = std::chrono::steady_clock::now();
   VoxelMap map(voxels);
   map.insert(points, 0);
-  const SegmentationResult r = segmentGroundLabels(map, ground);
-  std::vector<std::uint8_t> out(points.size(), 0);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::int64_t v = map.find(map.indexOf(points[i]));
-    if (v >= 0) out[i] = r.refined[v];
-  }
+  const std::vector<std::uint8_t> out = pointLabels(map, points, segmentGroundLabels(map, ground).refined);
   if (milliseconds) *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }
@@ -50,13 +60,7 @@ json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::ui
   {
     VoxelMap map(voxels);
     map.insert(points, 0);
-    const SegmentationResult r = segmentGroundLabels(map, ground);
-    std::vector<std::uint8_t> rough(points.size(), 0);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const std::int64_t v = map.find(map.indexOf(points[i]));
-      if (v >= 0) rough[i] = r.rough[v];
-    }
-    j["histogram"] = score(rough);
+    j["histogram"] = score(pointLabels(map, points, segmentGroundLabels(map, ground).rough));
   }
   j["fixed_band"] = score(groundByFixedBand(points, {Point3(0, 0, -sensor_height)}, ground.delta));
   j["ransac_plane"] = score(groundByRansacPlane(points, 0.2));

@@ -1,11 +1,11 @@
 #include "sim/sim_config.hpp"
 
 #include "rig/file_io.hpp"
+#include "rig/settings_io.hpp"
 
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include <functional>
 #include <map>
 #include <sstream>
 
@@ -17,13 +17,7 @@ namespace terrain::sim {
 
 namespace {
 
-void require(bool ok, const std::string& field, double value, const std::string& range) {
-  if (!ok) {
-    std::ostringstream s;
-    s << field << " = " << value << " is out of range (allowed: " << range << ")";
-    throw io::InputError(s.str());
-  }
-}
+constexpr auto require = io::requireInRange;
 
 }  // namespace
 
@@ -56,19 +50,9 @@ void validate(const SimConfig& c) {
 }
 
 void loadSimConfig(const std::filesystem::path& path, SimConfig& c) {
-  const std::string text = io::readFile(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw io::InputError(path.string() + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
-  }
-  if (root.IsNull()) return;
-  if (!root.IsMap()) throw io::InputError(path.string() + ": expected a map of sections (robot, lidar, camera, gps, gyro)");
-  // every settable field, by its dotted name
-  using Setter = std::function<void(const YAML::Node&)>;
-  auto num = [](double& f) { return Setter([&f](const YAML::Node& n) { f = n.as<double>(); }); };
-  auto integer = [](int& f) { return Setter([&f](const YAML::Node& n) { f = n.as<int>(); }); };
+  using io::Setter;
+  const auto num = io::numberSetter;
+  const auto integer = io::integerSetter;
   auto vec3 = [](Eigen::Vector3d& f) {
     return Setter([&f](const YAML::Node& n) {
       if (!n.IsSequence() || n.size() != 3) throw YAML::Exception(n.Mark(), "expected [x, y, z]");
@@ -105,26 +89,7 @@ void loadSimConfig(const std::filesystem::path& path, SimConfig& c) {
       {"gyro.noise_sigma", num(c.gyro.noise_sigma)},
       {"gyro.bias_sigma", num(c.gyro.bias_sigma)},
   };
-  auto apply = [&](const std::string& key, const YAML::Node& value) {
-    auto it = fields.find(key);
-    if (it == fields.end()) {
-      throw io::InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": unknown setting '" + key + "'");
-    }
-    try {
-      it->second(value);
-    } catch (const YAML::Exception& e) {
-      throw io::InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key +
-                           "' has a bad value (" + e.msg + ")");
-    }
-  };
-  for (const auto& kv : root) {
-    const std::string key = kv.first.as<std::string>();
-    if (kv.second.IsMap()) {
-      for (const auto& inner : kv.second) apply(key + "." + inner.first.as<std::string>(), inner.second);
-    } else {
-      apply(key, kv.second);
-    }
-  }
+  io::applySettings(path, fields, "robot, lidar, camera, gps, gyro");
 }
 
 std::string simConfigToJson(const SimConfig& c) {

@@ -21,6 +21,14 @@ std::shared_ptr<sim::World> urbanWorld(const test::TempDir& dir) {
   return std::make_shared<sim::World>(dir / "u.xml");
 }
 
+// true if some warning contains the text
+bool hasWarning(const Pipeline& pipeline, const std::string& text) {
+  for (const auto& w : pipeline.warnings()) {
+    if (w.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
 sim::SimConfig smallCamera() {
   sim::SimConfig c;
   c.camera.width = 320;
@@ -95,11 +103,7 @@ TEST(PipelineTest, BadFramesGiveWarningsNotCrashes) {
     ++k;
   }
   pipeline.finish();
-  const auto& w = pipeline.warnings();
-  auto has = [&](const std::string& text) {
-    for (const auto& s : w) if (s.find(text) != std::string::npos) return true;
-    return false;
-  };
+  auto has = [&](const std::string& text) { return hasWarning(pipeline, text); };
   EXPECT_TRUE(has("frame 12: empty lidar sweep"));
   EXPECT_TRUE(has("frame 13: 1 lidar points with NaN"));
   EXPECT_TRUE(has("frame 14: 1 lidar points with NaN"));
@@ -120,11 +124,7 @@ TEST(PipelineTest, AStandingRobotAndAnEmptyWorldAreReported) {
   Pipeline pipeline(rig.calibration(), PipelineConfig{});
   while (auto f = rig.next()) pipeline.process(f->sensors);
   pipeline.finish();
-  const auto& w = pipeline.warnings();
-  auto has = [&](const std::string& text) {
-    for (const auto& s : w) if (s.find(text) != std::string::npos) return true;
-    return false;
-  };
+  auto has = [&](const std::string& text) { return hasWarning(pipeline, text); };
   EXPECT_TRUE(has("heading unknown"));
   EXPECT_TRUE(has("the camera sees no non-ground vertex") || has("no objects"));
   EXPECT_EQ(pipeline.records().size(), 5u);

@@ -1,0 +1,49 @@
+#include "rig/settings_io.hpp"
+
+#include "rig/file_io.hpp"
+
+#include <sstream>
+
+namespace terrain::io {
+
+void applySettings(const std::filesystem::path& path, const std::map<std::string, Setter>& setters,
+                   const std::string& sections) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(readFile(path));
+  } catch (const YAML::Exception& e) {
+    throw InputError(path.string() + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+  if (root.IsNull()) return;
+  if (!root.IsMap()) throw InputError(path.string() + ": expected a map of sections (" + sections + ")");
+  auto apply = [&](const std::string& key, const YAML::Node& value) {
+    auto it = setters.find(key);
+    if (it == setters.end()) {
+      throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": unknown setting '" + key + "'");
+    }
+    try {
+      it->second(value);
+    } catch (const YAML::Exception& e) {
+      throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key + "' has a bad value (" +
+                       e.msg + ")");
+    }
+  };
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (kv.second.IsMap()) {
+      for (const auto& inner : kv.second) apply(key + "." + inner.first.as<std::string>(), inner.second);
+    } else {
+      apply(key, kv.second);
+    }
+  }
+}
+
+void requireInRange(bool ok, const std::string& field, double value, const std::string& range) {
+  if (!ok) {
+    std::ostringstream s;
+    s << field << " = " << value << " is out of range (allowed: " << range << ")";
+    throw InputError(s.str());
+  }
+}
+
+}  // namespace terrain::io
