@@ -55,6 +55,9 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.max_height", num(c.estimation.max_height)},
       {"estimation.top_margin", integer(c.estimation.top_margin)},
       {"estimation.fusion_quantile", num(c.estimation.fusion_quantile)},
+      {"estimation.require_sky_above", [&c](const YAML::Node& n) { c.estimation.require_sky_above = n.as<bool>(); }},
+      {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
+      {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
   };
 }
 
@@ -105,7 +108,9 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                    {"threshold", c.boundary.threshold}, {"erode", {c.boundary.erode_width, c.boundary.erode_height}},
                    {"dilate", {c.boundary.dilate_width, c.boundary.dilate_height}}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
-                     {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile}};
+                     {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile},
+                     {"require_sky_above", c.estimation.require_sky_above}, {"sky_blue_margin", c.estimation.sky_blue_margin},
+                     {"sky_min_brightness", c.estimation.sky_min_brightness}};
   return j.dump();
 }
 

@@ -6,9 +6,26 @@
 
 namespace terrain {
 
+namespace {
+
+// mean colour of the few pixels above row `top` in column u looks like daylight sky
+bool skyAbove(const cv::Mat& rgb, int u, int top, const BoundaryEstimationConfig& cfg) {
+  int r = 0, g = 0, b = 0, n = 0;
+  for (int row = top - 6; row <= top - 3; ++row) {
+    if (row < 0) continue;
+    const auto& p = rgb.at<cv::Vec3b>(row, u);
+    r += p[0], g += p[1], b += p[2], ++n;
+  }
+  if (n == 0) return false;
+  r /= n, g /= n, b /= n;
+  return b >= r + cfg.sky_blue_margin && b >= g && (r + g + b) / 3 >= cfg.sky_min_brightness;
+}
+
+}  // namespace
+
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& k, const Pose& world_from_camera,
-                                           const BoundaryEstimationConfig& cfg) {
+                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
   BoundaryEstimationStats stats;
   if (boundary.empty() || boundary.type() != CV_8UC1) return stats;
   const Pose camera_from_world = world_from_camera.inverse();
@@ -31,6 +48,10 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
       if (boundary.at<std::uint8_t>(row, u)) top = row;
     }
     if (top < 0 || top <= cfg.top_margin) continue;
+    if (cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.size() == boundary.size() && !skyAbove(rgb, u, top, cfg)) {
+      ++stats.no_sky;
+      continue;
+    }
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;

@@ -18,16 +18,24 @@ struct BoundaryEstimationConfig {
   int top_margin = 2;            // [px] a boundary this close to the image top may be cut: skipped
   std::size_t max_estimates = 15;  // estimates kept per vertex
   double fusion_quantile = 0.5;    // the fused height is this quantile of the kept estimates (0.5: median)
+  // Accept a top boundary only if the pixels just above it look like daylight sky (blue at least
+  // sky_blue_margin grey levels above red and not below green, mean brightness >= sky_min_brightness):
+  // an object that runs off the top of the image has more of itself above its topmost edge.
+  bool require_sky_above = false;  // off: on the CI suite it helps urban, flat, slope, rough, mixed but hurts forest
+  int sky_blue_margin = 10;
+  int sky_min_brightness = 100;
 };
 
 struct BoundaryEstimationStats {
   int projected = 0;  // non-ground vertices that fell inside the image
   int estimated = 0;  // of which received a height estimate
+  int no_sky = 0;     // of which were skipped: no sky above their top boundary
 };
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.
+// rgb: the camera image (CV_8UC3, RGB) for the sky test; may be empty (no test).
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
-                                           const BoundaryEstimationConfig& config);
+                                           const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat());
 
 }  // namespace terrain

@@ -126,7 +126,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
     rec.boundary_ms = msSince(t);
     t = Clock::now();
     const BoundaryEstimationStats stats = estimateBoundaries(mesh_, map_, last_boundaries_.cleaned, calibration_.camera,
-                                                             world_from_camera, config_.estimation);
+                                                             world_from_camera, config_.estimation, frame.image->rgb);
     rec.estimated_vertices = stats.estimated;
     if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
     rec.estimation_ms = msSince(t);

@@ -77,3 +77,37 @@ TEST(BoundaryEstimationTest, InverseProjectionOfAKnownTopPixelGivesTheExactHeigh
 
 }  // namespace
 }  // namespace terrain
+
+namespace terrain {
+namespace {
+
+// with the sky test on, a top boundary with sky above gives an estimate and one with more of
+// the object above (cut off by the image top) does not
+TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  Pose world_from_camera = Pose::Identity();
+  world_from_camera.linear().col(0) = Vector3(1, 0, 0);
+  world_from_camera.linear().col(1) = Vector3(0, 0, -1);
+  world_from_camera.linear().col(2) = Vector3(0, 1, 0);
+  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  VoxelMap map(VoxelMapConfig{0.2});
+  map.insert({Point3(3.05, 20.05, 1.05)}, 0);
+  map.voxels()[0].label = VoxelLabel::NonGround;
+  const auto top_px = project(k, world_from_camera.inverse() * Vector3(3.1, 20.1, 12.0));
+  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
+  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  BoundaryEstimationConfig cfg;
+  cfg.require_sky_above = true;
+  for (const bool sky : {true, false}) {
+    TerrainMesh mesh;
+    mesh.update(map, {0});
+    // above the edge: sky blue, or a beige facade
+    const cv::Mat rgb(480, 640, CV_8UC3, sky ? cv::Scalar(120, 160, 230) : cv::Scalar(200, 190, 170));
+    const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, rgb);
+    EXPECT_EQ(stats.estimated, sky ? 1 : 0);
+    EXPECT_EQ(stats.no_sky, sky ? 0 : 1);
+  }
+}
+
+}  // namespace
+}  // namespace terrain
