@@ -425,6 +425,12 @@ int main(int argc, char** argv) {
         results[sc.id()] = eval::flattenMetrics(
             runScenario(sc.type, sc.seed, sc.frames, run_sim, pipe_cfg, work / sc.id(), true, true));
       }
+      // every metric of every scenario, and a summary table beside the per-scenario reports
+      nlohmann::json all = results;
+      io::writeFileAtomic(work / "suite_results.json", all.dump(1) + "\n", true);
+      io::writeFileAtomic(work / "suite_summary.html", eval::suiteSummaryHtml(suite, results), true);
+      std::cerr << "regress: all metrics in " << (work / "suite_results.json").string() << ", summary in "
+                << (work / "suite_summary.html").string() << "\n";
       if (!reg_write.empty()) {
         eval::writeBaseline(reg_write, suite, results, reg_force);
         std::cout << "wrote baseline " << reg_write.string() << " for " << results.size() << " scenarios\n";

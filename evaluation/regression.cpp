@@ -132,6 +132,44 @@ void printTable(std::ostream& out, const RegressionResult& r) {
   out << r.regressions << " regressions in " << r.rows.size() << " checks\n";
 }
 
+std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
+  static const char* methods[] = {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"};
+  std::ostringstream h;
+  h << std::fixed << std::setprecision(3)
+    << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>suite " << suite.name
+    << "</title><style>body{font-family:sans-serif}table{border-collapse:collapse}td,th{border:1px solid #bbb;"
+       "padding:3px 8px;text-align:right}th{background:#eee}</style></head><body><h1>Suite "
+    << suite.name << "</h1><h2>Ground segmentation F1 per voxel</h2><table><tr><th>scenario</th>";
+  for (const char* m : methods) h << "<th>" << m << "</th>";
+  h << "</tr>";
+  auto value = [&](const std::map<std::string, double>& r, const std::string& k) -> std::string {
+    auto it = r.find(k);
+    if (it == r.end()) return "-";
+    std::ostringstream v;
+    v << std::fixed << std::setprecision(3) << it->second;
+    return v.str();
+  };
+  for (const auto& [scenario, r] : results) {
+    h << "<tr><td style=\"text-align:left\">" << scenario << "</td>";
+    for (const char* m : methods) h << "<td>" << value(r, std::string("ground_segmentation.") + m + ".f1") << "</td>";
+    h << "</tr>";
+  }
+  h << "</table><h2>Object heights and boundaries</h2><table><tr><th>scenario</th><th>MAE sensed m</th><th>MAE after m</th>"
+       "<th>estimated cells MAE sensed m</th><th>estimated cells MAE after m</th><th>height map MAE inpainting m</th>"
+       "<th>boundary coverage sensed</th><th>boundary coverage after</th><th>median ms per frame</th></tr>";
+  for (const auto& [scenario, r] : results) {
+    h << "<tr><td style=\"text-align:left\">" << scenario << "</td>";
+    for (const char* k : {"height_recovery.before.mae_m", "height_recovery.after.mae_m", "height_recovery.estimated_cells.before.mae_m",
+                          "height_recovery.estimated_cells.after.mae_m", "height_baselines.inpainting.mae_m",
+                          "boundary_coverage_before", "boundary_coverage", "timing.total.median_ms"}) {
+      h << "<td>" << value(r, k) << "</td>";
+    }
+    h << "</tr>";
+  }
+  h << "</table><p>Each scenario's full report.html is in its own output directory.</p></body></html>\n";
+  return h.str();
+}
+
 std::string junitXml(const Suite& suite, const RegressionResult& r) {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"" << suite.name << "\" tests=\"" << r.rows.size()

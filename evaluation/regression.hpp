@@ -56,6 +56,8 @@ struct RegressionResult {
 RegressionResult compare(const Suite& suite, const Results& baseline, const Results& results);
 
 void printTable(std::ostream& out, const RegressionResult& result);
+// HTML table of the suite's scenarios: every ground segmentation method's F1 and the height figures.
+std::string suiteSummaryHtml(const Suite& suite, const Results& results);
 std::string junitXml(const Suite& suite, const RegressionResult& result);
 
 }  // namespace terrain::eval
