@@ -147,8 +147,8 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   // height maps before / after / truth, one colour scale
   const auto& verts = p.mesh().vertices();
   if (!verts.empty()) {
-    int x0 = verts[0].cell.x(), y0 = verts[0].cell.y(), x1 = x0, y1 = y0;
-    for (const auto& v : verts) x0 = std::min(x0, v.cell.x()), y0 = std::min(y0, v.cell.y()), x1 = std::max(x1, v.cell.x()), y1 = std::max(y1, v.cell.y());
+    const auto [lo_cell, hi_cell] = p.mesh().cellBounds();
+    const int x0 = lo_cell.x(), y0 = lo_cell.y(), x1 = hi_cell.x(), y1 = hi_cell.y();
     const int step = std::max(1, std::max(x1 - x0, y1 - y0) / 400);
     const int cols = (x1 - x0) / step + 1, rows = (y1 - y0) / step + 1;
     cv::Mat before(rows, cols, CV_32FC1, cv::Scalar(std::nanf(""))), after = before.clone(), truth_map = before.clone();
@@ -201,8 +201,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     for (int v = 1; v < c.segmentation.rows; ++v) {
       for (int u = 0; u < c.segmentation.cols; ++u) {
         const int g = c.segmentation.at<std::uint16_t>(v, u) - 1, above = c.segmentation.at<std::uint16_t>(v - 1, u) - 1;
-        const auto cls = world.geomClass(g);
-        if (g != above && (cls == scenes::GeomClass::Building || cls == scenes::GeomClass::Crown || cls == scenes::GeomClass::Trunk)) {
+        if (g != above && scenes::isObjectClass(world.geomClass(g))) {
           bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(0, 220, 0);
         }
       }

@@ -11,6 +11,7 @@
 #include "evaluation/regression.hpp"
 #include "core/pipeline.hpp"
 #include "evaluation/kitti.hpp"
+#include "evaluation/metrics.hpp"
 #include "evaluation/report.hpp"
 #include "rig/kitti.hpp"
 #include "rig/dataset.hpp"
@@ -100,12 +101,6 @@ void applyChoices(PipelineConfig& c, const std::string& histogram, const std::st
   if (!parseHistogram(histogram, c.ground.histogram)) throw io::InputError("--histogram must be local or global, not '" + histogram + "'");
   if (!parseSolver(solver, c.ground.solver)) throw io::InputError("--solver must be icm or mincut, not '" + solver + "'");
   app::validate(c);
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 // the scorecard on the terminal, from the report
@@ -198,7 +193,8 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
             << pipeline.map().size() << " (" << ground << " ground), mesh vertices " << pipeline.mesh().vertices().size()
             << " (" << recovered << " raised by boundary estimation)\n"
             << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
-            << "per frame: median " << median(total) << " ms in all, " << median(seg) << " ms ground segmentation\n";
+            << "per frame: median " << eval::percentiles(total).median << " ms in all, " << eval::percentiles(seg).median
+            << " ms ground segmentation\n";
   if (!quiet) {
     for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
   }

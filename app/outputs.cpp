@@ -69,15 +69,10 @@ struct Grid {
 Grid gridOf(const TerrainMesh& mesh) {
   Grid g;
   if (mesh.vertices().empty()) return g;
-  const CellIndex first = mesh.vertices().front().cell;
-  int x1 = first.x(), y1 = first.y();
-  g.x0 = x1, g.y0 = y1;
-  for (const auto& m : mesh.vertices()) {
-    g.x0 = std::min(g.x0, m.cell.x()), g.y0 = std::min(g.y0, m.cell.y());
-    x1 = std::max(x1, m.cell.x()), y1 = std::max(y1, m.cell.y());
-  }
-  g.width = x1 - g.x0 + 1;
-  g.height = y1 - g.y0 + 1;
+  const auto [lo, hi] = mesh.cellBounds();
+  g.x0 = lo.x(), g.y0 = lo.y();
+  g.width = hi.x() - lo.x() + 1;
+  g.height = hi.y() - lo.y() + 1;
   return g;
 }
 

@@ -31,12 +31,12 @@ void Pipeline::process(const SensorFrame& frame) {
   const auto t0 = Clock::now();
   poses_.add(frame);
   const double pose_ms = msSince(t0);
-  held_.push_back(frame);
+  held_.push_back({frame, pose_ms});
   if (!poses_.ready()) return;
   // a frame waits until the GPS fixes after it no longer change its poses
-  while (!held_.empty() && held_.front().sweep.end_time <= poses_.finalUntil()) {
-    processReady(held_.front());
-    records_.back().pose_ms += pose_ms / std::max<std::size_t>(1, held_.size());
+  while (!held_.empty() && held_.front().frame.sweep.end_time <= poses_.finalUntil()) {
+    processReady(held_.front().frame);
+    records_.back().pose_ms += held_.front().pose_ms;
     held_.pop_front();
   }
 }
@@ -48,7 +48,8 @@ void Pipeline::finish() {
            " m: heading unknown, frames processed with heading 0 (east)");
     }
     while (!held_.empty()) {
-      processReady(held_.front());
+      processReady(held_.front().frame);
+      records_.back().pose_ms += held_.front().pose_ms;
       held_.pop_front();
     }
   }

@@ -67,7 +67,11 @@ class Pipeline {
   VoxelMap map_;
   TerrainMesh mesh_;
   SegmentationResult segmentation_;
-  std::deque<SensorFrame> held_;
+  struct HeldFrame {
+    SensorFrame frame;
+    double pose_ms;  // time spent adding it to the pose estimator
+  };
+  std::deque<HeldFrame> held_;
   std::vector<FrameRecord> records_;
   std::vector<std::string> warnings_;
   BoundaryImages last_boundaries_;

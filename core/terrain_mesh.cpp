@@ -5,6 +5,15 @@
 
 namespace terrain {
 
+std::pair<CellIndex, CellIndex> TerrainMesh::cellBounds() const {
+  CellIndex lo = vertices_.front().cell, hi = lo;
+  for (const auto& v : vertices_) {
+    lo = lo.cwiseMin(v.cell);
+    hi = hi.cwiseMax(v.cell);
+  }
+  return {lo, hi};
+}
+
 std::int64_t TerrainMesh::find(const CellIndex& cell) const {
   auto it = index_.find(key(cell));
   return it == index_.end() ? -1 : it->second;

@@ -30,6 +30,8 @@ class TerrainMesh {
 
   const std::vector<MeshVertex>& vertices() const { return vertices_; }
   std::vector<MeshVertex>& vertices() { return vertices_; }
+  // Smallest and largest cell index over all vertices (component-wise); the mesh must not be empty.
+  std::pair<CellIndex, CellIndex> cellBounds() const;
   // Vertex id of a cell, or -1.
   std::int64_t find(const CellIndex& cell) const;
   // Triangles over neighbouring cells (two per complete quad, one where a corner is missing),

@@ -53,8 +53,10 @@ class VoxelMap {
   // Bytes used by the map's own storage.
   std::size_t memoryBytes() const;
 
- private:
+  // A voxel index packed into 64 bits (21 bits per axis, +-1 M voxels): a key for hash maps.
   static std::uint64_t pack(const VoxelIndex& i);
+
+ private:
   void grow();
 
   double size_;

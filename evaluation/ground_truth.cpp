@@ -1,16 +1,14 @@
 #include "evaluation/ground_truth.hpp"
 
+#include "core/voxel_map.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace terrain::eval {
 
-std::uint64_t VoxelTruth::key(const VoxelIndex& i) {
-  constexpr std::int64_t off = 1 << 20;
-  return (static_cast<std::uint64_t>(i.x() + off) << 42) | (static_cast<std::uint64_t>(i.y() + off) << 21) |
-         static_cast<std::uint64_t>(i.z() + off);
-}
+std::uint64_t VoxelTruth::key(const VoxelIndex& i) { return VoxelMap::pack(i); }
 
 Pose interpolatePose(const std::vector<rig::TimedPose>& poses, double t) {
   if (poses.empty()) return Pose::Identity();
@@ -63,8 +61,7 @@ CellTruth cellTruth(const sim::World& world, double x, double y, double cell) {
     if (std::isfinite(top) && top > c.top) c.top = top, c.geom = geom;
   }
   c.terrain = world.terrainHeight(x, y);
-  const auto cls = world.geomClass(c.geom);
-  c.object = cls == scenes::GeomClass::Building || cls == scenes::GeomClass::Crown || cls == scenes::GeomClass::Trunk;
+  c.object = scenes::isObjectClass(world.geomClass(c.geom));
   return c;
 }
 

@@ -68,15 +68,11 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, double cell, const si
                                   const CameraIntrinsics& k, const CameraTruthFrame& f, int tolerance) {
   BoundaryCoverage out;
   const cv::Mat& seg = f.segmentation;
-  auto isObject = [&](int geom) {
-    const auto c = world.geomClass(geom);
-    return c == scenes::GeomClass::Building || c == scenes::GeomClass::Crown || c == scenes::GeomClass::Trunk;
-  };
   cv::Mat boundary(seg.size(), CV_8UC1, cv::Scalar(0));
   for (int v = 1; v < seg.rows; ++v) {
     for (int u = 0; u < seg.cols; ++u) {
       const int g = seg.at<std::uint16_t>(v, u) - 1, above = seg.at<std::uint16_t>(v - 1, u) - 1;
-      if (isObject(g) && g != above) boundary.at<std::uint8_t>(v, u) = 255;
+      if (scenes::isObjectClass(world.geomClass(g)) && g != above) boundary.at<std::uint8_t>(v, u) = 255;
     }
   }
   out.boundary_pixels = static_cast<std::size_t>(cv::countNonZero(boundary));
@@ -163,8 +159,8 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   {
     const auto& verts = pipeline.mesh().vertices();
     if (!verts.empty()) {
-      int x0 = verts[0].cell.x(), y0 = verts[0].cell.y(), x1 = x0, y1 = y0;
-      for (const auto& v : verts) x0 = std::min(x0, v.cell.x()), y0 = std::min(y0, v.cell.y()), x1 = std::max(x1, v.cell.x()), y1 = std::max(y1, v.cell.y());
+      const auto [lo, hi] = pipeline.mesh().cellBounds();
+      const int x0 = lo.x(), y0 = lo.y(), x1 = hi.x(), y1 = hi.y();
       cv::Mat sensed(y1 - y0 + 1, x1 - x0 + 1, CV_32FC1, cv::Scalar(std::nanf(""))), recovered = sensed.clone();
       for (const auto& v : verts) {
         sensed.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.sensed_height;
@@ -182,8 +178,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
           if (!std::isfinite(si) && !std::isfinite(sensed.at<float>(r0, c0))) continue;
           int geom = -1;
           const double top = world.surfaceHeight(x, y, &geom);
-          const auto cls = world.geomClass(geom);
-          if (cls != scenes::GeomClass::Building && cls != scenes::GeomClass::Crown && cls != scenes::GeomClass::Trunk) continue;
+          if (!scenes::isObjectClass(world.geomClass(geom))) continue;
           ++cells;
           if (std::isfinite(sensed.at<float>(r0, c0))) {
             ++c_sensed;

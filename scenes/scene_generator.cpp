@@ -182,19 +182,20 @@ struct TerrainGrid {
   }
 };
 
-// distance from a point to the path polyline, and the path heading at the closest point
+// the closest point of the path polyline to a point, its distance and the path heading there
 struct PathQuery {
   double distance;
   double heading;
+  Eigen::Vector2d nearest;
 };
 
 PathQuery queryPath(const std::vector<Eigen::Vector2d>& path, const Eigen::Vector2d& p) {
-  PathQuery best{1e18, 0};
+  PathQuery best{1e18, 0, path.front()};
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
     const Eigen::Vector2d a = path[i], ab = path[i + 1] - path[i];
     const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
     const double d = (a + t * ab - p).norm();
-    if (d < best.distance) best = {d, std::atan2(ab.y(), ab.x())};
+    if (d < best.distance) best = {d, std::atan2(ab.y(), ab.x()), a + t * ab};
   }
   return best;
 }
@@ -304,8 +305,7 @@ class SceneBuilder {
       const PathQuery q = queryPath(truth_.path, {s, 0});
       const Eigen::Vector2d dir(std::cos(q.heading), std::sin(q.heading));
       const Eigen::Vector2d normal(-dir.y(), dir.x());
-      const Eigen::Vector2d near = nearestOnPath({s, 0});
-      const Eigen::Vector2d centre = near + side * setback * normal;
+      const Eigen::Vector2d centre = q.nearest + side * setback * normal;
       const Disc disc{centre, 0.5 * std::hypot(width, depth) + 1.0};
       if (std::abs(centre.x()) + disc.radius > cfg_.extent || std::abs(centre.y()) + disc.radius > cfg_.extent) continue;
       // keep a street corridor of 6 m either side of the path
@@ -315,21 +315,6 @@ class SceneBuilder {
       addBuilding(centre, q.heading, width, depth, height);
       ++placed;
     }
-  }
-
-  Eigen::Vector2d nearestOnPath(const Eigen::Vector2d& p) const {
-    Eigen::Vector2d best = truth_.path.front();
-    double bd = 1e18;
-    for (std::size_t i = 0; i + 1 < truth_.path.size(); ++i) {
-      const Eigen::Vector2d a = truth_.path[i], ab = truth_.path[i + 1] - a;
-      const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-      const double d = (a + t * ab - p).norm();
-      if (d < bd) {
-        bd = d;
-        best = a + t * ab;
-      }
-    }
-    return best;
   }
 
   void addBuilding(const Eigen::Vector2d& c, double yaw, double width, double depth, double height) {

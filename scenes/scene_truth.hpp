@@ -20,6 +20,10 @@ const char* className(GeomClass c);
 GeomClass classFromName(const std::string& name);
 // True for classes that count as ground in segmentation scores.
 inline bool isGroundClass(GeomClass c) { return c == GeomClass::Ground; }
+// True for the parts of objects (buildings, trunks, crowns) whose heights are scored.
+inline bool isObjectClass(GeomClass c) {
+  return c == GeomClass::Building || c == GeomClass::Crown || c == GeomClass::Trunk;
+}
 
 struct ObjectTruth {
   std::string id;                       // "building_003", "tree_017"
