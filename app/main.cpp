@@ -1,8 +1,9 @@
 // terrain: the testbed's command-line entry point. Subcommands:
 //   scenes generate   write a generated MJCF scene with its ground truth
 //   record            drive a scene with the simulated rig and write a dataset
-//   reconstruct       run the pipeline over a recorded dataset
+//   reconstruct       run the pipeline over a recorded dataset (optionally with a real lidar)
 //   run               generate a scene, simulate and reconstruct in one go
+//   stream            send a capture or a simulated run as HDL-64E packets over UDP
 #include "app/bounded_queue.hpp"
 #include "app/html_report.hpp"
 #include "app/outputs.hpp"
@@ -16,6 +17,8 @@
 #include "rig/kitti.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
+#include "rig/pcap_file.hpp"
+#include "rig/velodyne_source.hpp"
 #include "scenes/scene_generator.hpp"
 #include "sim/simulated_rig.hpp"
 
@@ -237,7 +240,8 @@ int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool forc
   return 0;
 }
 
-int record(const fs::path& scene_path, int frames, const fs::path& out, bool force, const sim::SimConfig& config) {
+int record(const fs::path& scene_path, int frames, const fs::path& out, bool force, const sim::SimConfig& config,
+           bool with_pcap) {
   auto world = std::make_shared<sim::World>(scene_path);
   sim::SimulatedRig rig(world, config, frames);
   nlohmann::json producer;
@@ -246,19 +250,107 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   producer["scene_seed"] = world->truth().seed;
   producer["simulation"] = nlohmann::json::parse(sim::simConfigToJson(config));
   rig::DatasetWriter writer(out, rig.calibration(), rig.lasers(), producer.dump(), force);
+  // the same sweeps as HDL-64E packets in a capture, as the real sensor would have sent them
+  std::unique_ptr<rig::pcap::Writer> capture;
+  std::unique_ptr<rig::velodyne::PacketEncoder> encoder;
+  std::vector<rig::velodyne::TimedPacket> packets;
+  auto sendPackets = [&] {
+    for (const auto& p : packets) capture->write(rig::pcap::kSimulationEpoch + p.time, p.payload.data(), p.payload.size());
+    packets.clear();
+  };
+  if (with_pcap) {
+    capture = std::make_unique<rig::pcap::Writer>(out / "lidar.pcap", force);
+    encoder = std::make_unique<rig::velodyne::PacketEncoder>(rig.lasers(), rig.firingsPerTurn());
+  }
   app::Progress progress("record", frames);
   long long points = 0;
   const auto t0 = std::chrono::steady_clock::now();
   while (auto frame = rig.next()) {
     points += static_cast<long long>(frame->sensors.sweep.points.size());
     writer.write(*frame);
+    if (encoder) {
+      encoder->addSweep(frame->sensors.sweep, packets);
+      sendPackets();
+    }
     progress.update(frame->sensors.index + 1);
+  }
+  if (encoder) {
+    encoder->finish(packets);
+    sendPackets();
+    capture->close();
+    const auto& st = encoder->stats();
+    std::cout << "wrote lidar.pcap: " << st.packets << " HDL-64E packets, " << st.points << " returns";
+    if (st.too_close + st.too_far + st.off_schedule > 0) {
+      std::cout << " (" << st.too_close + st.too_far + st.off_schedule << " returns not encodable)";
+    }
+    std::cout << "\n";
   }
   writer.finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << "recorded " << frames << " frames (" << points << " lidar points, " << rig.raysCast() << " rays, "
             << static_cast<long long>(rig.raysCast() / std::max(seconds, 1e-9)) << " rays/s) into "
             << fs::absolute(out).string() << "\n";
+  return 0;
+}
+
+// sends packets at the sensor's pace (scaled by speed); returns how many went out late
+long long sendPaced(rig::UdpSender& out, const std::vector<rig::velodyne::TimedPacket>& packets, double first,
+                    std::chrono::steady_clock::time_point t0, double speed) {
+  long long late = 0;
+  for (const auto& p : packets) {
+    const auto due = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>((p.time - first) / speed));
+    if (std::chrono::steady_clock::now() > due + std::chrono::milliseconds(5)) ++late;
+    std::this_thread::sleep_until(due);
+    out.send(p.payload.data(), p.payload.size());
+  }
+  return late;
+}
+
+int stream(const fs::path& pcap_path, const fs::path& scene_path, int frames, const sim::SimConfig& config,
+           const std::string& to, double speed) {
+  const rig::LidarEndpoint target = rig::LidarEndpoint::parse("udp:" + to);
+  if (!(speed > 0 && speed <= 100)) throw io::InputError("--speed " + std::to_string(speed) + " is out of range (allowed: (0, 100])");
+  rig::UdpSender out(target.host, target.port);
+  long long sent = 0, late = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!pcap_path.empty()) {
+    // a capture: its own timestamps set the pace
+    rig::pcap::Reader reader(pcap_path, rig::velodyne::kDataPort);
+    rig::pcap::Frame f;
+    std::vector<rig::velodyne::TimedPacket> one(1);
+    double first = -1;
+    while (reader.next(f)) {
+      if (f.payload.size() != rig::velodyne::kPacketSize) continue;
+      if (first < 0) first = f.time;
+      one[0].time = f.time;
+      std::copy(f.payload.begin(), f.payload.end(), one[0].payload.begin());
+      late += sendPaced(out, one, first, t0, speed);
+      ++sent;
+    }
+    std::cerr << "stream: " << reader.stats().summary() << "\n";
+  } else {
+    // a simulated run, simulated as it is sent (no camera: only the lidar goes out)
+    sim::SimConfig cfg = config;
+    cfg.camera.enabled = false;
+    auto world = std::make_shared<sim::World>(scene_path);
+    sim::SimulatedRig rig(world, cfg, frames);
+    rig::velodyne::PacketEncoder encoder(rig.lasers(), rig.firingsPerTurn());
+    std::vector<rig::velodyne::TimedPacket> packets;
+    while (auto frame = rig.next()) {
+      encoder.addSweep(frame->sensors.sweep, packets);
+      late += sendPaced(out, packets, 0.0, t0, speed);
+      sent += static_cast<long long>(packets.size());
+      packets.clear();
+    }
+    encoder.finish(packets);
+    late += sendPaced(out, packets, 0.0, t0, speed);
+    sent += static_cast<long long>(packets.size());
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::cout << "sent " << sent << " packets to " << target.host << ":" << target.port << " in " << std::fixed
+            << std::setprecision(2) << seconds << " s (" << static_cast<long long>(sent / std::max(seconds, 1e-9))
+            << " packets/s, " << late << " sent more than 5 ms late)\n";
   return 0;
 }
 
@@ -295,6 +387,8 @@ int main(int argc, char** argv) {
   rec->add_option("--frames", rec_frames, "number of lidar sweeps to record")->capture_default_str();
   rec->add_option("--out", rec_out, "output dataset directory")->required();
   rec->add_flag("--force", rec_force, "write into an existing, non-empty directory");
+  bool rec_pcap = false;
+  rec->add_flag("--pcap", rec_pcap, "also write the lidar as HDL-64E packets in OUT/lidar.pcap (Wireshark, VeloView, PCL open it)");
   try {
     if (!config_file.empty()) sim::loadSimConfig(config_file, sim_cfg);
   } catch (const io::InputError& e) {
@@ -313,6 +407,32 @@ int main(int argc, char** argv) {
   recon->add_option("--input", recon_input, "dataset directory (from 'terrain record')")->required();
   recon->add_option("--out", recon_out, "output directory")->required();
   recon->add_flag("--force", recon_force, "write into an existing, non-empty directory");
+  std::string recon_lidar;
+  fs::path recon_calibration;
+  rig::VelodyneOptions recon_velodyne;
+  recon->add_option("--lidar", recon_lidar,
+                    "take the lidar from a Velodyne instead of the dataset: pcap:FILE (a capture) or udp:HOST:PORT "
+                    "(live packets, e.g. udp:0.0.0.0:2368); camera, GPS and gyro still come from --input, matched by time");
+  recon->add_option("--calibration", recon_calibration,
+                    "laser calibration for --lidar (ROS YAML or db.xml); default: the dataset's lasers.yaml");
+  recon->add_option("--lidar-time-base", recon_velodyne.decoder.time_base,
+                    "[s] added to the packets' time since the top of the hour, to match the other sensors' clock")
+      ->capture_default_str();
+  recon->add_option("--lidar-idle-timeout", recon_velodyne.idle_timeout,
+                    "[s] a live lidar stream ends after this long without packets")->capture_default_str();
+
+  // terrain stream
+  CLI::App* strm = app.add_subcommand("stream", "send a capture or a simulated run to a UDP address as HDL-64E packets at the sensor's rate");
+  fs::path strm_pcap, strm_scene;
+  int strm_frames = 60;
+  std::string strm_to = "127.0.0.1:2368", strm_sim_config;
+  double strm_speed = 1.0;
+  auto* strm_src = strm->add_option("--pcap", strm_pcap, "capture file to replay (its timestamps set the pace)");
+  strm->add_option("--scene", strm_scene, "or: scene MJCF file to simulate and send")->excludes(strm_src);
+  strm->add_option("--frames", strm_frames, "sweeps to simulate with --scene")->capture_default_str();
+  strm->add_option("--sim-config", strm_sim_config, "YAML simulation settings for --scene (as for 'terrain record --config')");
+  strm->add_option("--to", strm_to, "destination HOST:PORT")->capture_default_str();
+  strm->add_option("--speed", strm_speed, "pace relative to the real sensor (2: twice as fast), in (0, 100]")->capture_default_str();
 
   // terrain run
   CLI::App* run = app.add_subcommand("run", "generate a scene, simulate the rig and reconstruct, streaming (no dataset on disk)");
@@ -370,18 +490,42 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
-    if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg);
+    if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg, rec_pcap);
+    if (strm->parsed()) {
+      if (strm_pcap.empty() == strm_scene.empty()) throw io::InputError("give --pcap FILE or --scene FILE to stream");
+      sim::SimConfig cfg;
+      if (!strm_sim_config.empty()) sim::loadSimConfig(strm_sim_config, cfg);
+      return stream(strm_pcap, strm_scene, strm_frames, cfg, strm_to, strm_speed);
+    }
     if (recon->parsed()) {
       applyChoices(pipe_cfg, histogram, solver);
-      rig::DatasetSource source(recon_input);
-      io::prepareOutputDir(recon_out, recon_force);
+      auto dataset = std::make_unique<rig::DatasetSource>(recon_input);
       // a dataset recorded from a scene still on disk can be scored against it
       std::shared_ptr<sim::World> world;
-      const auto producer = nlohmann::json::parse(source.producerJson());
+      const auto producer = nlohmann::json::parse(dataset->producerJson());
       if (producer.contains("scene") && producer["scene"].is_string() && fs::exists(producer["scene"].get<std::string>())) {
         world = std::make_shared<sim::World>(producer["scene"].get<std::string>());
       }
+      if (recon_lidar.empty()) {
+        if (!recon_calibration.empty()) throw io::InputError("--calibration applies to --lidar only");
+        io::prepareOutputDir(recon_out, recon_force);
+        reconstruct(*dataset, pipe_cfg, recon_out, world.get());
+        return 0;
+      }
+      // the real-driver path: the lidar from packets, everything else from the dataset
+      const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(recon_lidar);
+      rig::LaserCalibration lasers = recon_calibration.empty() ? dataset->lasers() : rig::loadLaserCalibration(recon_calibration);
+      auto lidar = std::make_unique<rig::VelodyneLidar>(endpoint, std::move(lasers), recon_velodyne);
+      io::prepareOutputDir(recon_out, recon_force);
+      if (endpoint.kind == rig::LidarEndpoint::Kind::Udp) {
+        std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe() << "\n";
+      }
+      rig::LidarSwapSource source(std::move(dataset), std::move(lidar));
       reconstruct(source, pipe_cfg, recon_out, world.get());
+      std::cout << "lidar " << source.lidar().summary() << "\n";
+      if (source.pointsWithoutTruth() > 0) {
+        std::cout << "  " << source.pointsWithoutTruth() << " decoded points had no partner in the dataset's truth (not scored)\n";
+      }
       return 0;
     }
     if (run->parsed()) {

@@ -53,6 +53,8 @@ void validate(const LaserCalibration& c, const std::string& origin) {
   }
 }
 
+LaserCalibration readYamlLasers(const YAML::Node& root, const std::string& origin);
+
 LaserCalibration parseYaml(const std::string& text, const std::string& origin) {
   YAML::Node root;
   try {
@@ -63,14 +65,30 @@ LaserCalibration parseYaml(const std::string& text, const std::string& origin) {
   if (!root.IsMap() || !root["lasers"] || !root["lasers"].IsSequence()) {
     fail(origin, "expected a map with a 'lasers' list");
   }
+  try {
+    return readYamlLasers(root, origin);
+  } catch (const YAML::Exception& e) {
+    // whatever the field-by-field checks did not foresee
+    fail(origin, "unexpected YAML structure (line " + std::to_string(e.mark.line + 1) + ": " + e.msg + ")");
+  }
+}
+
+LaserCalibration readYamlLasers(const YAML::Node& root, const std::string& origin) {
   LaserCalibration c;
-  if (root["distance_resolution"]) c.distance_resolution = root["distance_resolution"].as<double>();
+  if (root["distance_resolution"]) {
+    try {
+      c.distance_resolution = root["distance_resolution"].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(origin, "distance_resolution is not a number");
+    }
+  }
   const YAML::Node lasers = root["lasers"];
   c.lasers.resize(lasers.size());
   std::vector<bool> seen(lasers.size(), false);
   for (std::size_t k = 0; k < lasers.size(); ++k) {
     const YAML::Node l = lasers[k];
     const std::string where = "lasers[" + std::to_string(k) + "]";
+    if (!l.IsMap()) fail(origin, where + ": expected a map of fields");
     auto get = [&](const char* key, bool required, double fallback) {
       if (!l[key]) {
         if (required) fail(origin, where + ": field '" + key + "' is missing");
@@ -199,6 +217,14 @@ std::string laserCalibrationToYaml(const LaserCalibration& c) {
       << "  max_intensity: " << l.max_intensity << "\n";
   }
   return y.str();
+}
+
+void laserRay(const LaserCorrection& l, double a, Vector3& origin, Vector3& direction) {
+  const double az = a - l.rot_correction;
+  const double ca = std::cos(az), sa = std::sin(az);
+  const double cv = std::cos(l.vert_correction), sv = std::sin(l.vert_correction);
+  direction = Vector3(cv * ca, -cv * sa, sv);
+  origin = Vector3(l.horiz_offset * sa, l.horiz_offset * ca, l.vert_offset);
 }
 
 }  // namespace terrain::rig

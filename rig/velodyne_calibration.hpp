@@ -1,6 +1,8 @@
 #pragma once
 // Per-laser geometry of a Velodyne lidar, read from the ROS driver's YAML or Velodyne's db.xml.
 
+#include "core/types.hpp"
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -28,6 +30,15 @@ struct LaserCalibration {
 
   int laserCount() const { return static_cast<int>(lasers.size()); }
 };
+
+// The ray of laser l at encoder angle a [rad], in the lidar frame (x forward at a = 0, y left,
+// z up): the beam leaves origin along the unit vector direction, and a raw distance d [m]
+// measures the point origin + (d + dist_correction) * direction. This is the correction model
+// of Velodyne's db.xml as PCL's HDLGrabber applies it: the azimuth is a - rot_correction
+// (clockwise seen from above), the elevation vert_correction, the vertical offset raises the
+// origin, the horizontal offset moves it sideways. The two-point corrections
+// (dist_correction_x/_y) and the focal intensity correction are not part of it.
+void laserRay(const LaserCorrection& l, double a, Vector3& origin, Vector3& direction);
 
 // Reads a calibration file; the format is taken from the content (YAML or db.xml). Throws
 // io::InputError naming the file, the laser and the field for anything missing or out of range.

@@ -13,8 +13,6 @@ namespace terrain::sim {
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
-
 // share of the beam energy a class sends back, for the intensity channel
 double reflectivity(scenes::GeomClass c) {
   switch (c) {
@@ -44,18 +42,6 @@ LidarSimulator::LidarSimulator(const World& world, const RayCaster& caster, rig:
   }
 }
 
-// The geometry of the ROS velodyne driver's point equations, read as a ray: the encoder angle
-// a minus the laser's rotational correction gives the beam azimuth (clockwise from x, seen from
-// above), its vertical correction the elevation, and the offsets move the beam origin.
-void LidarSimulator::beam(const rig::LaserCorrection& l, double a, Vector3& origin, Vector3& direction) {
-  const double az = a - l.rot_correction;
-  const double ca = std::cos(az), sa = std::sin(az);
-  const double cv = std::cos(l.vert_correction), sv = std::sin(l.vert_correction);
-  direction = Vector3(cv * ca, -cv * sa, sv);
-  origin = Vector3(-l.vert_offset * sv * ca + l.horiz_offset * sa, l.vert_offset * sv * sa + l.horiz_offset * ca,
-                   l.vert_offset * cv);
-}
-
 SimulatedSweep LidarSimulator::simulate(int sweep_index, double start_time, const Trajectory& trajectory) const {
   const int nl = lasers_.laserCount();
   const double period = 1.0 / config_.rotation_hz;
@@ -68,11 +54,13 @@ SimulatedSweep LidarSimulator::simulate(int sweep_index, double start_time, cons
   auto fire = [&](const tbb::blocked_range<int>& firings) {
     for (int j = firings.begin(); j < firings.end(); ++j) {
       const double t = start_time + period * j / firings_;
-      const double a = kTwoPi * j / firings_;
+      // the encoder position of this firing, as the sensor reports it (0.01 deg steps)
+      const double a = rig::velodyne::stepToRadians(rig::velodyne::encoderStep(j, firings_));
       const Pose world_from_lidar = trajectory.worldFromVehicle(t) * vehicle_from_lidar_;
       for (int l = 0; l < nl; ++l) {
         Vector3 o, dir;
-        beam(lasers_.lasers[l], a, o, dir);
+        const rig::LaserCorrection& laser = lasers_.lasers[l];
+        rig::laserRay(laser, a, o, dir);
         const RayHit hit = caster_.cast(world_from_lidar * o, world_from_lidar.linear() * dir);
         if (hit.geom < 0 || hit.distance > config_.max_range) continue;
         const std::uint64_t key = hashKeys(seed_, static_cast<std::uint64_t>(sweep_index), static_cast<std::uint64_t>(j),
@@ -81,6 +69,8 @@ SimulatedSweep LidarSimulator::simulate(int sweep_index, double start_time, cons
         const double noise = config_.range_noise * Random::normalFromBits(mixBits(key ^ 1), mixBits(key ^ 2));
         const double measured = hit.distance + noise + bias_[l];
         if (measured < config_.min_range || measured > config_.max_range) continue;
+        // the sensor reports range less its distance correction, never below one unit
+        if (measured - laser.dist_correction < lasers_.distance_resolution) continue;
         const Vector3 p = o + measured * dir;
         if (p.z() > config_.height_cap) continue;
         const scenes::GeomClass cls = world_.geomClass(hit.geom);

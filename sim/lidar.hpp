@@ -1,12 +1,13 @@
 #pragma once
-// Simulated Velodyne lidar: every laser of the calibration table fires at each encoder step of
-// the revolution, each firing at its own time while the vehicle moves (so sweeps carry real
+// Simulated Velodyne lidar: every laser of the calibration table fires at each firing of the
+// revolution (at encoder positions on the sensor's 0.01 deg grid, rig::velodyne::encoderStep), each firing at its own time while the vehicle moves (so sweeps carry real
 // motion skew). Ranges come from the ray caster (mj_ray semantics); Gaussian range noise, an
 // optional per-laser bias and dropout are added; returns above the height cap are not reported.
 
 #include "core/sensor_data.hpp"
 #include "rig/sensor_source.hpp"
 #include "rig/velodyne_calibration.hpp"
+#include "rig/velodyne_packet.hpp"
 #include "sim/ray_caster.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/trajectory.hpp"
@@ -31,9 +32,6 @@ class LidarSimulator {
   // Firings per revolution.
   int firingsPerTurn() const { return firings_; }
   const rig::LaserCalibration& lasers() const { return lasers_; }
-
-  // Beam origin and unit direction in the lidar frame for laser l at encoder angle a [rad].
-  static void beam(const rig::LaserCorrection& l, double a, Vector3& origin, Vector3& direction);
 
  private:
   const World& world_;

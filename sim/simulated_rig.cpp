@@ -55,6 +55,8 @@ SimulatedRig::SimulatedRig(std::shared_ptr<const World> world, const SimConfig& 
 
 SimulatedRig::~SimulatedRig() = default;
 
+int SimulatedRig::firingsPerTurn() const { return lidar_->firingsPerTurn(); }
+
 std::optional<rig::RigFrame> SimulatedRig::next() {
   if (next_ >= frames_) return std::nullopt;
   const int k = next_++;

@@ -29,6 +29,8 @@ class SimulatedRig : public rig::SensorSource {
 
   const World& world() const { return *world_; }
   const Trajectory& trajectory() const { return *trajectory_; }
+  // lidar firings per revolution (each at rig::velodyne::encoderStep(j, n))
+  int firingsPerTurn() const;
   // rays cast so far
   long long raysCast() const { return rays_; }
 

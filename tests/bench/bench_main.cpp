@@ -53,7 +53,7 @@ const Rays& sweepRays() {
     for (int j = 0; j < 2083; ++j) {
       for (const auto& l : lasers.lasers) {
         Vector3 o, d;
-        sim::LidarSimulator::beam(l, 2 * M_PI * j / 2083, o, d);
+        rig::laserRay(l, rig::velodyne::stepToRadians(rig::velodyne::encoderStep(j, 2083)), o, d);
         r.origin.push_back(sensor + o);
         r.dir.push_back(d);
       }

@@ -56,7 +56,7 @@ TEST(LidarTest, EachPointIsLabelledWithTheGeomItHit) {
   for (std::size_t i = 0; i < pts.size(); i += 7) {
     const auto& p = pts[i];
     Vector3 o, dir;
-    LidarSimulator::beam(rig.lasers().lasers[p.ring], p.azimuth, o, dir);
+    rig::laserRay(rig.lasers().lasers[p.ring], p.azimuth, o, dir);
     const Pose world_from_lidar = rig.trajectory().worldFromVehicle(p.time) * vehicle_from_lidar;
     const RayHit hit = caster.castReference(world_from_lidar * o, world_from_lidar.linear() * dir);
     ASSERT_EQ(truth[i].geom, hit.geom);

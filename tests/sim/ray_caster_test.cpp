@@ -24,7 +24,7 @@ TEST(RayCasterTest, WallIsHitAtDistanceOverCosElevation) {
     rig::LaserCorrection laser;
     laser.vert_correction = elev;
     Vector3 o, dir;
-    LidarSimulator::beam(laser, 0.0, o, dir);
+    rig::laserRay(laser, 0.0, o, dir);
     const RayHit hit = caster.cast(o + Vector3(0, 0, 2), dir);
     ASSERT_EQ(hit.geom, wall) << "elevation " << elev;
     EXPECT_NEAR(hit.distance, d / std::cos(elev), 1e-9);
@@ -34,11 +34,11 @@ TEST(RayCasterTest, WallIsHitAtDistanceOverCosElevation) {
 TEST(RayCasterTest, BeamAzimuthIsClockwiseFromForward) {
   rig::LaserCorrection laser;
   Vector3 o, dir;
-  LidarSimulator::beam(laser, 0.5 * M_PI, o, dir);  // a quarter turn clockwise seen from above: right
+  rig::laserRay(laser, 0.5 * M_PI, o, dir);  // a quarter turn clockwise seen from above: right
   EXPECT_NEAR(dir.x(), 0.0, 1e-12);
   EXPECT_NEAR(dir.y(), -1.0, 1e-12);
   laser.rot_correction = 0.1;  // the beam lags the encoder by rot_correction
-  LidarSimulator::beam(laser, 0.1, o, dir);
+  rig::laserRay(laser, 0.1, o, dir);
   EXPECT_NEAR(dir.x(), 1.0, 1e-12);
   EXPECT_NEAR(dir.y(), 0.0, 1e-12);
 }

@@ -1,0 +1,260 @@
+#include "rig/velodyne_source.hpp"
+
+#include "rig/file_io.hpp"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+namespace terrain::rig {
+
+namespace {
+
+sockaddr_in socketAddress(const std::string& host, std::uint16_t port, const std::string& what) {
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(port);
+  if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1) {
+    throw io::InputError(what + ": '" + host + "' is not an IPv4 address");
+  }
+  return a;
+}
+
+std::string addressText(const std::string& host, std::uint16_t port) { return host + ":" + std::to_string(port); }
+
+}  // namespace
+
+LidarEndpoint LidarEndpoint::parse(const std::string& text) {
+  LidarEndpoint e;
+  if (text.rfind("pcap:", 0) == 0 && text.size() > 5) {
+    e.kind = Kind::Pcap;
+    e.path = text.substr(5);
+    return e;
+  }
+  if (text.rfind("udp:", 0) == 0 && text.size() > 4) {
+    e.kind = Kind::Udp;
+    std::string rest = text.substr(4);
+    const auto colon = rest.rfind(':');
+    if (colon != std::string::npos) {
+      const std::string port = rest.substr(colon + 1);
+      rest = rest.substr(0, colon);
+      char* end = nullptr;
+      const long p = std::strtol(port.c_str(), &end, 10);
+      if (port.empty() || *end != '\0' || p < 0 || p > 65535) {
+        throw io::InputError("lidar source '" + text + "': port '" + port + "' is not a number in [0, 65535]");
+      }
+      e.port = static_cast<std::uint16_t>(p);
+    }
+    if (!rest.empty()) e.host = rest;
+    socketAddress(e.host, e.port, "lidar source '" + text + "'");  // checks the address
+    return e;
+  }
+  throw io::InputError("lidar source '" + text + "': expected pcap:FILE or udp:HOST:PORT (for example udp:0.0.0.0:2368)");
+}
+
+std::string LidarEndpoint::describe() const {
+  return kind == Kind::Pcap ? "pcap:" + path : "udp:" + addressText(host, port);
+}
+
+// ---------------------------------------------------------------------------------------------
+// sockets
+
+UdpReceiver::UdpReceiver(const std::string& host, std::uint16_t port) {
+  const std::string where = "udp:" + addressText(host, port);
+  sockaddr_in a = socketAddress(host, port, where);
+  fd_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd_ < 0) throw io::InputError(where + ": cannot open a socket (" + std::strerror(errno) + ")");
+  const int one = 1;
+  ::setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  // a deep receive buffer: a second of HDL-64E traffic is about 4 MB
+  const int buffer = 16 << 20;
+  ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
+  if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    const std::string why = std::strerror(errno);
+    ::close(fd_);
+    throw io::InputError(where + ": cannot bind (" + why + ")");
+  }
+  socklen_t len = sizeof a;
+  ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
+  port_ = ntohs(a.sin_port);
+}
+
+UdpReceiver::~UdpReceiver() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+long UdpReceiver::receive(std::uint8_t* buffer, std::size_t capacity, std::chrono::milliseconds timeout) {
+  pollfd p{fd_, POLLIN, 0};
+  const int ready = ::poll(&p, 1, static_cast<int>(timeout.count()));
+  if (ready <= 0) return -1;
+  const ssize_t n = ::recv(fd_, buffer, capacity, MSG_TRUNC);
+  return n < 0 ? -1 : static_cast<long>(n);
+}
+
+UdpSender::UdpSender(const std::string& host, std::uint16_t port) {
+  const std::string where = "udp:" + addressText(host, port);
+  const sockaddr_in a = socketAddress(host, port, where);
+  address_.assign(reinterpret_cast<const std::uint8_t*>(&a), reinterpret_cast<const std::uint8_t*>(&a) + sizeof a);
+  fd_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd_ < 0) throw io::InputError(where + ": cannot open a socket (" + std::strerror(errno) + ")");
+  const int one = 1;
+  ::setsockopt(fd_, SOL_SOCKET, SO_BROADCAST, &one, sizeof one);
+}
+
+UdpSender::~UdpSender() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void UdpSender::send(const std::uint8_t* data, std::size_t size) {
+  if (::sendto(fd_, data, size, 0, reinterpret_cast<const sockaddr*>(address_.data()),
+               static_cast<socklen_t>(address_.size())) < 0) {
+    throw std::runtime_error(std::string("sending a lidar packet failed: ") + std::strerror(errno));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// the lidar
+
+VelodyneLidar::VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration calibration, VelodyneOptions options)
+    : endpoint_(endpoint), options_(options), assembler_(std::move(calibration), options.decoder) {
+  if (endpoint_.kind == LidarEndpoint::Kind::Pcap) {
+    pcap_ = std::make_unique<pcap::Reader>(endpoint_.path, endpoint_.port);
+  } else {
+    udp_ = std::make_unique<UdpReceiver>(endpoint_.host, endpoint_.port);
+  }
+}
+
+VelodyneLidar::~VelodyneLidar() = default;
+
+std::optional<LidarSweep> VelodyneLidar::next() {
+  std::vector<std::uint8_t> buffer(65536);
+  while (ready_pos_ >= ready_.size()) {
+    if (ended_) return std::nullopt;
+    ready_.clear();
+    ready_pos_ = 0;
+    bool got = false;
+    if (pcap_) {
+      pcap::Frame f;
+      got = pcap_->next(f);
+      if (got) assembler_.push(f.payload.data(), f.payload.size(), ready_);
+    } else {
+      const double wait = received_ ? options_.idle_timeout : options_.first_timeout;
+      const long n = udp_->receive(buffer.data(), buffer.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
+      got = n >= 0;
+      if (got) {
+        received_ = true;
+        assembler_.push(buffer.data(), static_cast<std::size_t>(n), ready_);
+      }
+    }
+    if (!got) {
+      ended_ = true;
+      if (auto last = assembler_.flush()) ready_.push_back(std::move(*last));
+    }
+  }
+  return std::move(ready_[ready_pos_++]);
+}
+
+std::string VelodyneLidar::summary() const {
+  std::string s = endpoint_.describe() + " (" + velodyne::modelName(assembler_.model()) + "): " + assembler_.stats().summary();
+  if (pcap_) s += "; capture: " + pcap_->stats().summary();
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// lidar from one place, the other sensors from another
+
+LidarSwapSource::LidarSwapSource(std::unique_ptr<SensorSource> others, std::unique_ptr<VelodyneLidar> lidar)
+    : others_(std::move(others)), lidar_(std::move(lidar)) {
+  truth_by_laser_.resize(static_cast<std::size_t>(lidar_->calibration().laserCount()));
+}
+
+void LidarSwapSource::pullUntil(double time) {
+  while (!others_done_ && pulled_until_ < time) {
+    auto f = others_->next();
+    if (!f) {
+      others_done_ = true;
+      break;
+    }
+    const SensorFrame& s = f->sensors;
+    pulled_until_ = s.sweep.end_time;
+    gps_.insert(gps_.end(), s.gps.begin(), s.gps.end());
+    gyro_.insert(gyro_.end(), s.gyro.begin(), s.gyro.end());
+    if (s.image) {
+      Image im{s.image->time, *s.image, {}, {}};
+      if (f->truth) im.depth = f->truth->depth, im.segmentation = f->truth->segmentation;
+      images_.push_back(std::move(im));
+    }
+    if (f->truth) {
+      has_truth_ = true;
+      poses_.insert(poses_.end(), f->truth->poses.begin(), f->truth->poses.end());
+      const auto& pts = s.sweep.points;
+      for (std::size_t i = 0; i < pts.size() && i < f->truth->points.size(); ++i) {
+        if (pts[i].ring < truth_by_laser_.size()) truth_by_laser_[pts[i].ring].push_back({pts[i].time, f->truth->points[i]});
+      }
+    }
+  }
+}
+
+std::optional<RigFrame> LidarSwapSource::next() {
+  auto sweep = lidar_->next();
+  if (!sweep) return std::nullopt;
+  // everything timed before the sweep's end, as the simulated rig and datasets frame it; the
+  // packets time the end to about a microsecond, and what is timed at the boundary itself
+  // belongs to the next sweep
+  const double end = sweep->end_time - 2e-6;
+  pullUntil(end);
+  RigFrame frame;
+  SensorFrame& s = frame.sensors;
+  s.index = index_++;
+  auto take = [end](auto& buffer, auto& into) {
+    auto it = buffer.begin();
+    while (it != buffer.end() && it->time < end) ++it;
+    into.assign(buffer.begin(), it);
+    buffer.erase(buffer.begin(), it);
+  };
+  take(gps_, s.gps);
+  take(gyro_, s.gyro);
+  std::vector<Image> images;
+  take(images_, images);
+  if (!images.empty()) s.image = images.back().image;
+  if (has_truth_) {
+    FrameTruth t;
+    if (!images.empty()) t.depth = images.back().depth, t.segmentation = images.back().segmentation;
+    // poses over the sweep and one either side, for interpolation
+    const double start = sweep->start_time;
+    auto first = std::find_if(poses_.begin(), poses_.end(), [&](const TimedPose& p) { return p.time >= start; });
+    if (first != poses_.begin()) --first;
+    for (auto it = first; it != poses_.end(); ++it) {
+      t.poses.push_back(*it);
+      if (it->time > end) break;
+    }
+    poses_.erase(poses_.begin(), first);
+    // each point takes the truth of its partner: same laser, same firing
+    t.points.resize(sweep->points.size());
+    for (std::size_t i = 0; i < sweep->points.size(); ++i) {
+      const LidarPoint& p = sweep->points[i];
+      auto& list = truth_by_laser_[p.ring];
+      auto it = std::lower_bound(list.begin(), list.end(), p.time - 1e-5,
+                                 [](const TruthPoint& a, double time) { return a.time < time; });
+      if (it != list.end() && std::abs(it->time - p.time) <= 1e-5) {
+        t.points[i] = it->truth;
+      } else {
+        ++points_without_truth_;
+      }
+    }
+    for (auto& list : truth_by_laser_) {
+      while (!list.empty() && list.front().time < start - 1e-3) list.pop_front();
+    }
+    frame.truth = std::move(t);
+  }
+  s.sweep = std::move(*sweep);
+  return frame;
+}
+
+}  // namespace terrain::rig
