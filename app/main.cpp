@@ -4,11 +4,13 @@
 //   reconstruct       run the pipeline over a recorded dataset (optionally with a real lidar)
 //   run               generate a scene, simulate and reconstruct in one go
 //   stream            send a capture or a simulated run as HDL-64E packets over UDP
+//   evaluate          score a finished run again from what it kept (OUT/state/)
 #include "app/bounded_queue.hpp"
 #include "app/html_report.hpp"
 #include "app/outputs.hpp"
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
+#include "app/run_state.hpp"
 #include "evaluation/regression.hpp"
 #include "core/pipeline.hpp"
 #include "evaluation/kitti.hpp"
@@ -138,6 +140,25 @@ void printScorecard(const nlohmann::json& r) {
             << r["timing"]["total"]["p95_ms"].get<double>() << " ms (sensing period 100 ms)\n";
 }
 
+// scores a finished pipeline against the truth (when there is a world) and writes report.json and
+// report.html into out; without a world, report.json holds what needs no truth
+nlohmann::json evaluate(const Pipeline& pipeline, const eval::RunTruth& truth, const sim::World* world, const fs::path& out,
+                        bool quiet) {
+  nlohmann::json report;
+  if (world) {
+    report = eval::evaluateRun(pipeline, truth, *world);
+    if (!quiet) printScorecard(report);
+    io::writeFileAtomic(out / "report.html", app::htmlReport(report, pipeline, truth, *world, "terrain reconstruction report"), true);
+  } else {
+    report["frames"] = pipeline.records().size();
+    report["voxels"] = pipeline.map().size();
+    report["timing"] = eval::timingJson(pipeline.records());
+  }
+  report["config"] = nlohmann::json::parse(app::pipelineConfigToJson(pipeline.config()));
+  io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
+  return report;
+}
+
 // sensing on its own thread, processing on this one; writes the outputs into out. With a world,
 // the ground truth the source carries is scored (it never reaches the pipeline).
 nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out,
@@ -201,20 +222,12 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   if (!quiet) {
     for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
   }
-  nlohmann::json report;
-  if (world && truth.voxels.size() > 0) {
-    report = eval::evaluateRun(pipeline, truth, *world);
-    if (!quiet) printScorecard(report);
-    io::writeFileAtomic(out / "report.html", app::htmlReport(report, pipeline, truth, *world, "terrain reconstruction report"), true);
-  } else {
-    report["frames"] = pipeline.records().size();
-    report["voxels"] = pipeline.map().size();
-    report["timing"] = eval::timingJson(pipeline.records());
-  }
-  report["config"] = nlohmann::json::parse(app::pipelineConfigToJson(config));
-  io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
-  if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json, report.html into "
-            << fs::absolute(out).string() << "\n";
+  // what scoring needs stays beside the outputs, for 'terrain evaluate --run'
+  const bool scored = world && truth.voxels.size() > 0;
+  if (scored) app::writeRunState(out, pipeline, truth, world->scenePath());
+  nlohmann::json report = evaluate(pipeline, truth, scored ? world : nullptr, out, quiet);
+  if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json"
+                        << (scored ? ", report.html, state/" : "") << " into " << fs::absolute(out).string() << "\n";
   return report;
 }
 
@@ -421,6 +434,12 @@ int main(int argc, char** argv) {
   recon->add_option("--lidar-idle-timeout", recon_velodyne.idle_timeout,
                     "[s] a live lidar stream ends after this long without packets")->capture_default_str();
 
+  // terrain evaluate
+  CLI::App* evalc = app.add_subcommand("evaluate", "score a finished run (of 'terrain run' or 'terrain reconstruct') again: report.json and report.html");
+  fs::path eval_run, eval_out;
+  evalc->add_option("--run", eval_run, "the run's output directory (it holds state/)")->required();
+  evalc->add_option("--out", eval_out, "where to write report.json and report.html (default: the run directory, replacing its reports)");
+
   // terrain stream
   CLI::App* strm = app.add_subcommand("stream", "send a capture or a simulated run to a UDP address as HDL-64E packets at the sensor's rate");
   fs::path strm_pcap, strm_scene;
@@ -491,6 +510,21 @@ int main(int argc, char** argv) {
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
     if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg, rec_pcap);
+    if (evalc->parsed()) {
+      app::SavedRun saved = app::readRunState(eval_run);
+      if (!fs::exists(saved.scene)) throw io::InputError(saved.scene.string() + ": the run's scene is no longer there");
+      const sim::World world(saved.scene);
+      const fs::path out = eval_out.empty() ? eval_run : eval_out;
+      if (!eval_out.empty()) {
+        fs::create_directories(out);
+        for (const char* f : {"report.json", "report.html"}) {
+          if (fs::exists(out / f)) throw io::InputError((out / f).string() + ": exists (give another --out, or leave --out out to replace the run's own reports)");
+        }
+      }
+      evaluate(*saved.pipeline, *saved.truth, &world, out, false);
+      std::cout << "wrote report.json and report.html into " << fs::absolute(out).string() << "\n";
+      return 0;
+    }
     if (strm->parsed()) {
       if (strm_pcap.empty() == strm_scene.empty()) throw io::InputError("give --pcap FILE or --scene FILE to stream");
       sim::SimConfig cfg;

@@ -103,10 +103,12 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                  {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
                  {"bin_size", c.ground.bin_size}, {"delta", c.ground.delta}, {"range_margin", c.ground.range_margin},
                  {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius}, {"alpha", c.ground.alpha},
-                 {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations}};
+                 {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations},
+                 {"threads", c.ground.threads}};
   j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},
-                   {"threshold", c.boundary.threshold}, {"erode", {c.boundary.erode_width, c.boundary.erode_height}},
-                   {"dilate", {c.boundary.dilate_width, c.boundary.dilate_height}}};
+                   {"threshold", c.boundary.threshold}, {"erode_width", c.boundary.erode_width},
+                   {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},
+                   {"dilate_height", c.boundary.dilate_height}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
                      {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile},
                      {"require_sky_above", c.estimation.require_sky_above}, {"sky_blue_margin", c.estimation.sky_blue_margin},

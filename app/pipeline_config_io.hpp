@@ -16,6 +16,7 @@ void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& confi
 // Throws io::InputError naming the first field outside its range.
 void validate(const PipelineConfig& config);
 
+// The same fields and names as the YAML file (JSON is YAML: the result loads as a config file).
 std::string pipelineConfigToJson(const PipelineConfig& config);
 
 }  // namespace terrain::app

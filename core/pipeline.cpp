@@ -57,12 +57,29 @@ void Pipeline::finish() {
     segmentation_ = segmentGround(map_, config_.ground);
     dirty_ = false;
   }
+  for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
   if (!map_.voxels().empty()) {
     std::size_t ground = 0;
     for (auto g : segmentation_.refined) ground += g;
     if (ground == 0) warn("no voxel was labelled ground");
     if (ground == segmentation_.refined.size()) warn("every voxel was labelled ground: no objects");
   }
+}
+
+bool Pipeline::restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertices, SegmentationResult segmentation,
+                       std::vector<FrameRecord> records) {
+  const std::size_t n = voxels.size();
+  if (segmentation.rough.size() != n || segmentation.refined.size() != n || segmentation.ground_height.size() != n) return false;
+  for (const auto& v : vertices) {
+    if (v.top_voxel >= n) return false;
+  }
+  if (!map_.restore(std::move(voxels))) return false;
+  if (!mesh_.restore(std::move(vertices))) return false;
+  segmentation_ = std::move(segmentation);
+  records_ = std::move(records);
+  held_.clear();
+  dirty_ = false;
+  return true;
 }
 
 void Pipeline::processReady(const SensorFrame& frame) {

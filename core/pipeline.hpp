@@ -33,6 +33,7 @@ struct FrameRecord {
   double pose_ms = 0, voxel_ms = 0, mesh_ms = 0, segmentation_ms = 0, boundary_ms = 0, estimation_ms = 0, total_ms = 0;
   std::size_t points = 0, new_voxels = 0, voxels = 0;
   int estimated_vertices = 0;
+  Point3 position = Point3::Zero();  // [m] estimated vehicle position at `time`, from the final poses (set by finish())
 };
 
 class Pipeline {
@@ -53,6 +54,12 @@ class Pipeline {
   const PoseEstimator& poses() const { return poses_; }
   const RigCalibration& calibration() const { return calibration_; }
   const PipelineConfig& config() const { return config_; }
+  // Replaces the pipeline's final state with a saved one (for scoring a finished run again).
+  // Returns false if the voxels or mesh vertices are inconsistent (duplicates, labels not one per
+  // voxel, a vertex's top voxel out of range).
+  bool restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertices, SegmentationResult segmentation,
+               std::vector<FrameRecord> records);
+
   // the last frame's boundary images (empty if it had no image)
   const BoundaryImages& lastBoundaries() const { return last_boundaries_; }
   int lastBoundaryFrame() const { return last_boundary_frame_; }

@@ -14,6 +14,19 @@ std::pair<CellIndex, CellIndex> TerrainMesh::cellBounds() const {
   return {lo, hi};
 }
 
+bool TerrainMesh::restore(std::vector<MeshVertex> vertices) {
+  vertices_ = std::move(vertices);
+  index_.clear();
+  for (std::uint32_t id = 0; id < vertices_.size(); ++id) {
+    if (!index_.try_emplace(key(vertices_[id].cell), id).second) {
+      vertices_.clear();
+      index_.clear();
+      return false;
+    }
+  }
+  return true;
+}
+
 std::int64_t TerrainMesh::find(const CellIndex& cell) const {
   auto it = index_.find(key(cell));
   return it == index_.end() ? -1 : it->second;

@@ -38,6 +38,10 @@ class TerrainMesh {
   // counter-clockwise seen from above.
   std::vector<std::array<std::uint32_t, 3>> triangles() const;
 
+  // Replaces the mesh with these vertices (a saved mesh read back). Returns false, leaving the
+  // mesh empty, if two vertices share a cell.
+  bool restore(std::vector<MeshVertex> vertices);
+
   // Adds a recovered-height estimate to a vertex; the fused value is the `quantile` (0.5: median)
   // of the last max_estimates estimates.
   void addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates, double quantile = 0.5);

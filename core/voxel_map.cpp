@@ -53,6 +53,28 @@ void VoxelMap::grow() {
   slots_.swap(slots);
 }
 
+bool VoxelMap::restore(std::vector<Voxel> voxels) {
+  voxels_ = std::move(voxels);
+  new_voxels_.clear();
+  std::size_t n = 1 << 16;
+  while (n < 2 * (voxels_.size() + 1)) n *= 2;
+  slots_.assign(n, kEmpty);
+  const std::size_t mask = n - 1;
+  for (std::uint32_t id = 0; id < voxels_.size(); ++id) {
+    std::size_t t = hashKey(pack(voxels_[id].index)) & mask;
+    while (slots_[t] != kEmpty) {
+      if (voxels_[slots_[t]].index == voxels_[id].index) {
+        voxels_.clear();
+        slots_.assign(1 << 16, kEmpty);
+        return false;
+      }
+      t = (t + 1) & mask;
+    }
+    slots_[t] = id;
+  }
+  return true;
+}
+
 std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t frame,
                              const std::vector<std::array<std::uint8_t, 4>>* colours) {
   const std::size_t before = voxels_.size();

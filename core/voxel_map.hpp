@@ -50,6 +50,10 @@ class VoxelMap {
   VoxelIndex indexOf(const Point3& p) const;
   Point3 centreOf(const VoxelIndex& index) const;
 
+  // Replaces the map's content with these voxels (a saved map read back). Returns false, leaving
+  // the map empty, if two voxels share an index.
+  bool restore(std::vector<Voxel> voxels);
+
   // Bytes used by the map's own storage.
   std::size_t memoryBytes() const;
 

@@ -25,6 +25,14 @@ class VoxelTruth {
   // true points in a voxel: (ground, non-ground)
   std::pair<std::uint32_t, std::uint32_t> votes(const VoxelIndex& index) const;
   std::size_t size() const { return votes_.size(); }
+  double voxelSize() const { return size_; }
+  // every voxel's votes by packed index (VoxelMap::pack), and adding to them (a saved truth read back)
+  const std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>>& allVotes() const { return votes_; }
+  void addVotes(std::uint64_t packed_index, std::uint32_t ground, std::uint32_t non_ground) {
+    auto& v = votes_[packed_index];
+    v.first += ground;
+    v.second += non_ground;
+  }
 
  private:
   static std::uint64_t key(const VoxelIndex& i);

@@ -139,7 +139,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   g["histogram"]["energy"] = seg.energy_rough;
   const std::vector<Point3> pts = voxelPoints(map);
   std::vector<Point3> vehicle;
-  for (const auto& rec : pipeline.records()) vehicle.push_back(pipeline.poses().worldFromVehicle(rec.time).translation());
+  for (const auto& rec : pipeline.records()) vehicle.push_back(rec.position);
   g["fixed_band"] = segmentationJson(map, groundByFixedBand(pts, vehicle, pipeline.config().ground.delta), truth.voxels);
   g["ransac_plane"] = segmentationJson(map, groundByRansacPlane(pts, 0.2), truth.voxels);
   g["morphological_filter"] = segmentationJson(map, groundByMorphologicalFilter(pts, MorphologicalFilterConfig{}), truth.voxels);

@@ -183,6 +183,42 @@ void BM_KittiScanSegmentation(benchmark::State& state) {
 }
 BENCHMARK(BM_KittiScanSegmentation)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// decoding one second of HDL-64E traffic (10 sweeps, every laser returning)
+void BM_PacketDecode(benchmark::State& state) {
+  static const auto packets = [] {
+    const rig::LaserCalibration lasers = rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+    const int n = 2083;
+    rig::velodyne::PacketEncoder encoder(lasers, n);
+    std::vector<rig::velodyne::TimedPacket> out;
+    for (int k = 0; k < 10; ++k) {
+      LidarSweep sweep;
+      sweep.start_time = 0.1 * k;
+      sweep.end_time = sweep.start_time + 0.1;
+      for (int j = 0; j < n; ++j) {
+        const double a = rig::velodyne::stepToRadians(rig::velodyne::encoderStep(j, n));
+        for (const auto& l : lasers.lasers) {
+          Vector3 o, d;
+          rig::laserRay(l, a, o, d);
+          const Vector3 p = o + (5.0 + 0.37 * l.id + 0.01 * (j % 97)) * d;
+          sweep.points.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), 50.0f,
+                                  static_cast<std::uint16_t>(l.id), static_cast<float>(a), sweep.start_time + 0.1 * j / n});
+        }
+      }
+      encoder.addSweep(sweep, out);
+    }
+    return out;
+  }();
+  static const rig::LaserCalibration lasers = rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+  for (auto _ : state) {
+    rig::velodyne::SweepAssembler a(lasers);
+    std::vector<LidarSweep> sweeps;
+    for (const auto& p : packets) a.push(p.payload.data(), p.payload.size(), sweeps);
+    benchmark::DoNotOptimize(sweeps.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(packets.size()));
+}
+BENCHMARK(BM_PacketDecode)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // keeps the median of every benchmark for the summary table
 class Collector : public benchmark::ConsoleReporter {
  public:
@@ -231,6 +267,11 @@ int main(int argc, char** argv) {
   if (const auto* r = get("BM_Segmentation/1")) std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation min-cut, same map", ms(*r), "<= 250 ms", naive ? ms(*naive) / ms(*r) : 0.0);
   if (naive) std::printf("%-44s %11.1f ms %16s %12s\n", "segmentation, naive hash map (baseline)", ms(*naive), "", "1.0x");
   if (const auto* r = get("BM_CameraRender")) std::printf("%-44s %10.1f f/s %16s %12s\n", "camera 640x480 (RGB, depth, segmentation)", perSecond(*r), ">= 10 f/s", "");
+  if (const auto* r = get("BM_PacketDecode")) {
+    // the real sensor sends 20,833 firings/s, 6 a packet
+    std::printf("%-44s %10.0f k/s %16s %11.1fx\n", "HDL-64E packets decoded into sweeps", perSecond(*r) / 1e3, ">= 3.5 k/s",
+                perSecond(*r) / (20833.3 / 6));
+  }
   if (const auto* r = get("BM_KittiScanSegmentation")) std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation", ms(*r), "<= 10 ms", "");
   return 0;
 }

@@ -1,0 +1,76 @@
+// 'terrain evaluate --run OUT' scores a finished run again from what it kept in OUT/state/: the
+// same report as the run wrote, and clear errors for a damaged state.
+
+#include "rig/file_io.hpp"
+#include "tests/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+namespace terrain {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kCli = TERRAIN_CLI;
+
+int sh(const std::string& command) { return std::system(command.c_str()); }
+
+class EvaluateTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir();
+    ASSERT_EQ(0, sh(kCli + " run --scenario forest --seed 3 --frames 8 --out " + run().string() + " > /dev/null"));
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static fs::path run() { return *dir_ / "run"; }
+  static test::TempDir* dir_;
+};
+test::TempDir* EvaluateTest::dir_ = nullptr;
+
+TEST_F(EvaluateTest, ScoresAFinishedRunAsTheRunDid) {
+  ASSERT_TRUE(fs::exists(run() / "state" / "state.json"));
+  const fs::path again = *dir_ / "again";
+  ASSERT_EQ(0, sh(kCli + " evaluate --run " + run().string() + " --out " + again.string() + " > /dev/null"));
+  EXPECT_EQ(io::readFile(run() / "report.json"), io::readFile(again / "report.json"));
+  EXPECT_EQ(io::readFile(run() / "report.html"), io::readFile(again / "report.html"));
+  // a second time into the same place is refused, and what is there stays
+  const std::string before = io::readFile(again / "report.json");
+  EXPECT_NE(0, sh(kCli + " evaluate --run " + run().string() + " --out " + again.string() + " > /dev/null 2>&1"));
+  EXPECT_EQ(before, io::readFile(again / "report.json"));
+}
+
+TEST_F(EvaluateTest, DamagedStateGetsAClearError) {
+  // a copy of the run whose files are damaged one at a time
+  const fs::path copy = *dir_ / "copy", log = *dir_ / "log";
+  auto damaged = [&](const std::string& file, const std::string& content) {
+    fs::remove_all(copy);
+    fs::copy(run(), copy, fs::copy_options::recursive);
+    std::ofstream(copy / "state" / file, std::ios::binary | std::ios::trunc) << content;
+    const int rc = sh(kCli + " evaluate --run " + copy.string() + " --out " + (*dir_ / "x").string() + " > " + log.string() + " 2>&1");
+    return std::make_pair(rc, io::readFile(log));
+  };
+  const std::string bin = io::readFile(run() / "state" / "pipeline.bin");
+  auto [rc1, msg1] = damaged("pipeline.bin", bin.substr(0, bin.size() / 2));
+  EXPECT_EQ(rc1 >> 8, 2);
+  EXPECT_NE(msg1.find("pipeline.bin"), std::string::npos) << msg1;
+  EXPECT_TRUE(msg1.find("cut short") != std::string::npos || msg1.find("do not fit in the file") != std::string::npos) << msg1;
+  auto [rc2, msg2] = damaged("truth.bin", "garbage");
+  EXPECT_NE(rc2, 0);
+  EXPECT_NE(msg2.find("not a terrain run state"), std::string::npos) << msg2;
+  auto [rc3, msg3] = damaged("state.json", "{\"format\": \"something-else/9\"}");
+  EXPECT_NE(rc3, 0);
+  EXPECT_NE(msg3.find("format is not terrain-run-state/1"), std::string::npos) << msg3;
+  auto [rc4, msg4] = damaged("pipeline_config.json", "ground: {delta: -1}");
+  EXPECT_NE(rc4, 0);
+  EXPECT_NE(msg4.find("ground.delta"), std::string::npos) << msg4;
+  EXPECT_FALSE(fs::exists(*dir_ / "x" / "report.json"));
+  // not a run directory at all
+  EXPECT_NE(0, sh(kCli + " evaluate --run " + dir_->path().string() + " > " + log.string() + " 2>&1"));
+  EXPECT_NE(io::readFile(log).find("state.json: missing"), std::string::npos) << io::readFile(log);
+}
+
+}  // namespace
+}  // namespace terrain
