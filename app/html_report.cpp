@@ -209,7 +209,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     const Pose camera_from_world = c.world_from_camera.inverse();
     const double cell = p.map().voxelSize();
     for (const auto& m : verts) {
-      if (m.estimates.empty()) continue;
+      if (!m.raised()) continue;
       const auto px = project(p.calibration().camera, camera_from_world * Point3((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell, m.height()));
       if (px) cv::circle(bgr, {static_cast<int>(px->x()), static_cast<int>(px->y())}, 1, cv::Scalar(0, 0, 255), cv::FILLED);
     }

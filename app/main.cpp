@@ -100,6 +100,9 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_option("--kx", c.boundary.kx, "weight of horizontal change in the gradient")->capture_default_str();
   cmd.add_option("--ky", c.boundary.ky, "weight of vertical change in the gradient")->capture_default_str();
   cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")->capture_default_str();
+  cmd.add_option("--spread-distance", c.estimation.spread_distance,
+                 "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
+      ->capture_default_str();
 }
 
 void applyChoices(PipelineConfig& c, const std::string& histogram, const std::string& solver) {
@@ -209,7 +212,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   std::vector<double> total, seg;
   for (const auto& r : pipeline.records()) total.push_back(r.total_ms), seg.push_back(r.segmentation_ms);
   std::size_t recovered = 0;
-  for (const auto& v : pipeline.mesh().vertices()) recovered += !v.estimates.empty();
+  for (const auto& v : pipeline.mesh().vertices()) recovered += v.raised();
   const auto& s = pipeline.segmentation();
   std::size_t ground = 0;
   for (auto g : s.refined) ground += g;

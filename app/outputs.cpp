@@ -52,7 +52,7 @@ void writePly(const fs::path& path, const Pipeline& p) {
     const auto c = vertexColour(p, m);
     s.append(reinterpret_cast<const char*>(c.data()), 3);
     append(s, static_cast<std::uint8_t>(!p.map().voxels()[m.top_voxel].coloured));
-    append(s, static_cast<std::uint8_t>(!m.estimates.empty()));
+    append(s, static_cast<std::uint8_t>(m.raised()));
   }
   for (const auto& t : tris) {
     append(s, static_cast<std::uint8_t>(3));

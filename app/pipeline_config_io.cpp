@@ -58,6 +58,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.require_sky_above", [&c](const YAML::Node& n) { c.estimation.require_sky_above = n.as<bool>(); }},
       {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
       {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
+      {"estimation.spread_distance", num(c.estimation.spread_distance)},
   };
 }
 
@@ -85,6 +86,8 @@ void validate(const PipelineConfig& c) {
   }
   require(c.estimation.max_distance > 0, "estimation.max_distance", c.estimation.max_distance, "> 0 m");
   require(c.estimation.max_height > 0, "estimation.max_height", c.estimation.max_height, "> 0 m");
+  require(c.estimation.spread_distance >= 0 && c.estimation.spread_distance <= 200, "estimation.spread_distance",
+          c.estimation.spread_distance, "[0, 200] m");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
           c.estimation.fusion_quantile, "[0, 1]");
 }
@@ -112,7 +115,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
                      {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile},
                      {"require_sky_above", c.estimation.require_sky_above}, {"sky_blue_margin", c.estimation.sky_blue_margin},
-                     {"sky_min_brightness", c.estimation.sky_min_brightness}};
+                     {"sky_min_brightness", c.estimation.sky_min_brightness},
+                     {"spread_distance", c.estimation.spread_distance},};
   return j.dump();
 }
 

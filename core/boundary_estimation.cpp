@@ -21,6 +21,10 @@ bool skyAbove(const cv::Mat& rgb, int u, int top, const BoundaryEstimationConfig
   return b >= r + cfg.sky_blue_margin && b >= g && (r + g + b) / 3 >= cfg.sky_min_brightness;
 }
 
+bool nonGround(const MeshVertex& m, const VoxelMap& map) {
+  return map.voxels()[m.top_voxel].label == VoxelLabel::NonGround;
+}
+
 }  // namespace
 
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
@@ -34,7 +38,7 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   auto& vertices = mesh.vertices();
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     MeshVertex& m = vertices[i];
-    if (map.voxels()[m.top_voxel].label != VoxelLabel::NonGround) continue;
+    if (!nonGround(m, map)) continue;
     const double x = (m.cell.x() + 0.5) * cell, y = (m.cell.y() + 0.5) * cell;
     const Point3 world(x, y, m.sensed_height);
     if ((world - centre).head<2>().norm() > cfg.max_distance) continue;
@@ -59,6 +63,38 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     ++stats.estimated;
   }
   return stats;
+}
+
+int spreadEstimates(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& cfg) {
+  auto& vertices = mesh.vertices();
+  for (auto& m : vertices) m.spread = false;
+  const int max_hops = static_cast<int>(std::floor(cfg.spread_distance / map.voxelSize()));
+  if (max_hops <= 0) return 0;
+  // multi-source breadth-first walk; sources in id order, so ties go to the lower id
+  std::vector<std::int64_t> source(vertices.size(), -1);
+  std::vector<int> hops(vertices.size(), 0);
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    if (!vertices[i].estimates.empty() && nonGround(vertices[i], map)) source[i] = i, queue.push_back(i);
+  }
+  int spread = 0;
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const std::uint32_t i = queue[q];
+    if (hops[i] >= max_hops) continue;
+    const CellIndex c = vertices[i].cell;
+    for (const CellIndex& d : {CellIndex(1, 0), CellIndex(-1, 0), CellIndex(0, 1), CellIndex(0, -1)}) {
+      const std::int64_t j = mesh.find(c + d);
+      if (j < 0 || source[j] >= 0 || !nonGround(vertices[j], map)) continue;
+      source[j] = source[i];
+      hops[j] = hops[i] + 1;
+      MeshVertex& m = vertices[j];
+      m.spread = true;
+      m.recovered_height = vertices[source[j]].recovered_height;
+      ++spread;
+      queue.push_back(static_cast<std::uint32_t>(j));
+    }
+  }
+  return spread;
 }
 
 }  // namespace terrain

@@ -24,6 +24,10 @@ struct BoundaryEstimationConfig {
   bool require_sky_above = false;  // off: on the CI suite it helps urban, flat, slope, rough, mixed but hurts forest
   int sky_blue_margin = 10;
   int sky_min_brightness = 100;
+  // Vertices of an object that never got an estimate of their own (the camera never saw their
+  // column's top) take the recovered height of the nearest estimated vertex reachable through
+  // neighbouring non-ground vertices, up to spread_distance away; 0 turns this off.
+  double spread_distance = 0.0;  // [m]
 };
 
 struct BoundaryEstimationStats {
@@ -37,5 +41,11 @@ struct BoundaryEstimationStats {
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat());
+
+// Spreads recovered heights over the rest of each object (config.spread_distance): a breadth-first
+// walk from every estimated non-ground vertex through 4-neighbouring non-ground vertices; each
+// vertex without estimates takes the height of the nearest one (ties: the lower vertex id).
+// Returns the number of vertices that took a height.
+int spreadEstimates(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& config);
 
 }  // namespace terrain

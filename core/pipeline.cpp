@@ -57,6 +57,7 @@ void Pipeline::finish() {
     segmentation_ = segmentGround(map_, config_.ground);
     dirty_ = false;
   }
+  spreadEstimates(mesh_, map_, config_.estimation);
   for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
   if (!map_.voxels().empty()) {
     std::size_t ground = 0;

@@ -29,7 +29,7 @@ bool TerrainMesh::restore(std::vector<MeshVertex> vertices) {
 
 std::int64_t TerrainMesh::find(const CellIndex& cell) const {
   auto it = index_.find(key(cell));
-  return it == index_.end() ? -1 : it->second;
+  return it == index_.end() ? std::int64_t{-1} : static_cast<std::int64_t>(it->second);
 }
 
 void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& voxel_ids) {

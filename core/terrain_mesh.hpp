@@ -19,8 +19,12 @@ struct MeshVertex {
   float sensed_height = 0;      // [m] height of the top voxel
   std::vector<float> estimates; // [m] recovered-height estimates from the frames that saw the top
   float recovered_height = 0;   // [m] fused estimate (median), valid when !estimates.empty()
+  bool spread = false;          // without estimates of its own: recovered_height comes from the
+                                // nearest estimated vertex of the same object (spreadEstimates)
 
-  float height() const { return estimates.empty() ? sensed_height : std::max(sensed_height, recovered_height); }
+  // raised by boundary estimation, from its own estimates or its object's
+  bool raised() const { return !estimates.empty() || spread; }
+  float height() const { return raised() ? std::max(sensed_height, recovered_height) : sensed_height; }
 };
 
 class TerrainMesh {

@@ -40,7 +40,7 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
     const CellTruth t = cellTruth(world, x, y, voxel_size);
     if (!std::isfinite(t.top)) continue;
     if (!t.object) {
-      out.raised_terrain_cells += !v.estimates.empty() && v.height() > t.top + 1.0;
+      out.raised_terrain_cells += v.raised() && v.height() > t.top + 1.0;
       continue;
     }
     double d = std::numeric_limits<double>::infinity();

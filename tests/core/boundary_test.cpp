@@ -109,5 +109,78 @@ TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
   }
 }
 
+// a row of cells x = 0..6 at y = 0, each with one voxel; labels as given (1 ground, 2 non-ground)
+struct Row {
+  VoxelMap map{VoxelMapConfig{}};
+  TerrainMesh mesh;
+  explicit Row(const std::vector<VoxelLabel>& labels) {
+    std::vector<Voxel> voxels;
+    std::vector<MeshVertex> vertices;
+    for (int x = 0; x < static_cast<int>(labels.size()); ++x) {
+      Voxel v;
+      v.index = VoxelIndex(x, 0, 10);
+      v.height = 2.0f;
+      v.label = labels[x];
+      voxels.push_back(v);
+      MeshVertex m;
+      m.cell = CellIndex(x, 0);
+      m.top_voxel = static_cast<std::uint32_t>(x);
+      m.sensed_height = 2.0f;
+      vertices.push_back(m);
+    }
+    EXPECT_TRUE(map.restore(voxels));
+    EXPECT_TRUE(mesh.restore(vertices));
+  }
+};
+
+TEST(BoundaryEstimationTest, EstimatesSpreadOverTheirObjectOnlyAndOnlySoFar) {
+  const auto N = VoxelLabel::NonGround, G = VoxelLabel::Ground;
+  Row row({N, N, N, N, G, N, N});
+  row.mesh.addEstimate(0, 12.0f, 15);
+  BoundaryEstimationConfig cfg;
+  cfg.spread_distance = 0.5;  // 2 cells of 0.2 m
+  EXPECT_EQ(spreadEstimates(row.mesh, row.map, cfg), 2);
+  const auto& v = row.mesh.vertices();
+  EXPECT_FLOAT_EQ(v[1].height(), 12.0f);
+  EXPECT_FLOAT_EQ(v[2].height(), 12.0f);
+  EXPECT_FLOAT_EQ(v[3].height(), 2.0f);  // 3 cells away
+  // a ground vertex ends the object: nothing crosses it however far the spread goes
+  cfg.spread_distance = 10;
+  EXPECT_EQ(spreadEstimates(row.mesh, row.map, cfg), 3);
+  EXPECT_FLOAT_EQ(v[3].height(), 12.0f);
+  EXPECT_FALSE(v[4].raised());
+  EXPECT_FALSE(v[5].raised());
+  EXPECT_FLOAT_EQ(v[6].height(), 2.0f);
+  // off: nothing spread, and what was spread before is taken back
+  cfg.spread_distance = 0;
+  EXPECT_EQ(spreadEstimates(row.mesh, row.map, cfg), 0);
+  EXPECT_FLOAT_EQ(v[1].height(), 2.0f);
+  EXPECT_TRUE(v[0].raised());
+}
+
+TEST(TerrainMeshTest, TrianglesUseOnlyExistingVertices) {
+  // cells (0,0) (1,0) (0,1) (1,1) and (2,0): the full quad at (0,0) gives 2 triangles; at (1,0)
+  // the corner (2,1) is missing, so one triangle (1,0) (2,0) (1,1); nothing else
+  TerrainMesh mesh;
+  std::vector<MeshVertex> vs;
+  for (const CellIndex& c : {CellIndex(0, 0), CellIndex(1, 0), CellIndex(0, 1), CellIndex(1, 1), CellIndex(2, 0)}) {
+    MeshVertex m;
+    m.cell = c;
+    vs.push_back(m);
+  }
+  ASSERT_TRUE(mesh.restore(vs));
+  EXPECT_EQ(mesh.find(CellIndex(5, 5)), -1);
+  EXPECT_EQ(mesh.find(CellIndex(2, 0)), 4);
+  const auto tris = mesh.triangles();
+  EXPECT_EQ(tris.size(), 3u);
+  for (const auto& t : tris) {
+    for (auto i : t) EXPECT_LT(i, vs.size());
+  }
+  // two vertices of one cell are refused
+  vs.push_back(vs.front());
+  EXPECT_FALSE(mesh.restore(vs));
+  EXPECT_TRUE(mesh.vertices().empty());
+}
+
 }  // namespace
 }  // namespace terrain
