@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace terrain {
 
@@ -122,6 +123,13 @@ class GroundHeight {
       std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
       for (std::uint32_t i = 0; i < voxels.size(); ++i) ids[fill[tileOf(voxels[i].index)]++] = i;
     }
+    // positions and heights in tile order, so that the window passes below read memory in order
+    std::vector<double> px(voxels.size()), py(voxels.size());
+    std::vector<float> ph(voxels.size());
+    tbb::parallel_for(std::size_t{0}, voxels.size(), [&](std::size_t j) {
+      const auto& v = voxels[ids[j]];
+      px[j] = (v.index.x() + 0.5) * cell_, py[j] = (v.index.y() + 0.5) * cell_, ph[j] = v.height;
+    });
     // the lowest voxel of every column, per tile
     std::vector<std::vector<Point3>> lowest(tiles);
     tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
@@ -148,6 +156,14 @@ class GroundHeight {
       const int tx = static_cast<int>(t % nx_), ty = static_cast<int>(t / nx_);
       std::vector<Point3> candidates;
       std::vector<double> residual;
+      std::size_t window = 0;
+      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+          const int ux = tx + dx, uy = ty + dy;
+          if (ux >= 0 && uy >= 0 && ux < nx_ && uy < ny_) window += start[static_cast<std::size_t>(uy) * nx_ + ux + 1] - start[static_cast<std::size_t>(uy) * nx_ + ux];
+        }
+      }
+      residual.reserve(window);
       for (int pass = 0; pass < 2; ++pass) {
         for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
           for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
@@ -158,10 +174,8 @@ class GroundHeight {
               candidates.insert(candidates.end(), lowest[u].begin(), lowest[u].end());
               continue;
             }
-            for (std::uint32_t j = start[u]; j < start[u + 1]; ++j) {
-              const auto& v = voxels[ids[j]];
-              residual.push_back(v.height - planes_[t].at((v.index.x() + 0.5) * cell_, (v.index.y() + 0.5) * cell_));
-            }
+            const Plane& plane = planes_[t];
+            for (std::uint32_t j = start[u]; j < start[u + 1]; ++j) residual.push_back(ph[j] - plane.at(px[j], py[j]));
           }
         }
         if (pass == 0) planes_[t] = fitPlane(std::move(candidates));
@@ -196,35 +210,49 @@ class GroundHeight {
     return static_cast<std::size_t>(floorDiv(i.y(), k_) - ty0_) * nx_ + (floorDiv(i.x(), k_) - tx0_);
   }
 
-  // least squares (normal equations, centred) in rounds that drop points far from the plane
-  static Plane fitPlane(std::vector<Point3> pts) {
-    Plane plane;
-    for (int round = 0; round < 3 && pts.size() >= 3; ++round) {
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (const auto& p : pts) mean += p;
-      mean /= static_cast<double>(pts.size());
-      Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
-      Eigen::Vector2d atb = Eigen::Vector2d::Zero();
-      double zmin = std::numeric_limits<double>::infinity();
-      for (const auto& p : pts) {
-        const Eigen::Vector2d d(p.x() - mean.x(), p.y() - mean.y());
-        ata += d * d.transpose();
-        atb += d * (p.z() - mean.z());
-        zmin = std::min(zmin, p.z());
-      }
+  // sums of a point set, relative to a reference point near it, for least squares in one pass
+  struct Moments {
+    double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0;
+    double zmin = std::numeric_limits<double>::infinity();
+    void add(const Point3& p, const Point3& ref) {
+      const double dx = p.x() - ref.x(), dy = p.y() - ref.y(), dz = p.z() - ref.z();
+      n += 1, x += dx, y += dy, z += dz, xx += dx * dx, xy += dx * dy, yy += dy * dy, xz += dx * dz, yz += dy * dz;
+      zmin = std::min(zmin, p.z());
+    }
+    // the least-squares plane z = a x + b y + c (normal equations, centred); a steeper plane than
+    // 35 degrees is not terrain: level at the lowest point instead
+    Plane plane(const Point3& ref) const {
+      const double mx = x / n, my = y / n, mz = z / n;
+      Eigen::Matrix2d ata;
+      ata << xx - n * mx * mx, xy - n * mx * my, xy - n * mx * my, yy - n * my * my;
+      const Eigen::Vector2d atb(xz - n * mx * mz, yz - n * my * mz);
       Eigen::Vector2d ab = Eigen::Vector2d::Zero();
       if (std::abs(ata.determinant()) > 1e-9) ab = ata.ldlt().solve(atb);
-      plane = {ab.x(), ab.y(), mean.z() - ab.x() * mean.x() - ab.y() * mean.y()};
-      // a steeper plane than 35 degrees is not terrain: fall back to level
-      if (std::hypot(plane.a, plane.b) > 0.7) plane = {0, 0, zmin};
-      std::vector<Point3> kept;
-      for (const auto& p : pts) {
-        if (std::abs(p.z() - plane.at(p.x(), p.y())) < 1.0 - 0.3 * round) kept.push_back(p);
-      }
-      if (kept.size() < 3) break;
-      pts.swap(kept);
+      Plane p{ab.x(), ab.y(), ref.z() + mz - ab.x() * (ref.x() + mx) - ab.y() * (ref.y() + my)};
+      if (std::hypot(p.a, p.b) > 0.7) p = {0, 0, zmin};
+      return p;
     }
-    if (pts.size() < 3 && !pts.empty()) plane = {0, 0, pts.front().z()};
+  };
+
+  // least squares in three rounds, each fitted to the points the previous plane left within
+  // 1.0 m, then 0.7 m; one pass over the points per round
+  static Plane fitPlane(std::vector<Point3> pts) {
+    if (pts.size() < 3) return pts.empty() ? Plane{} : Plane{0, 0, pts.front().z()};
+    const Point3 ref = pts.front();
+    Moments all;
+    for (const auto& p : pts) all.add(p, ref);
+    Plane plane = all.plane(ref);
+    for (int round = 1; round < 3; ++round) {
+      const double limit = 1.0 - 0.3 * (round - 1);
+      Moments near;
+      std::size_t kept = 0;
+      for (std::size_t r = 0; r < pts.size(); ++r) {
+        if (std::abs(pts[r].z() - plane.at(pts[r].x(), pts[r].y())) < limit) near.add(pts[r], ref), pts[kept++] = pts[r];
+      }
+      if (kept < 3) break;
+      pts.resize(kept);
+      plane = near.plane(ref);
+    }
     return plane;
   }
 
@@ -234,6 +262,99 @@ class GroundHeight {
   int k_ = 1, tx0_ = 0, ty0_ = 0, nx_ = 0, ny_ = 0;
   std::vector<Plane> planes_;
   std::vector<std::uint8_t> has_plane_;
+};
+
+// The voxel ids of the map ordered by column (in blocks of 32 x 32 columns) and height, for
+// finding the neighbours of every voxel with short, mostly cache-resident scans instead of one
+// hash-table probe per neighbour.
+class ColumnIndex {
+ public:
+  explicit ColumnIndex(const std::vector<Voxel>& voxels) {
+    const std::size_t n = voxels.size();
+    // number the non-empty blocks as they are first met
+    block_.resize(n);
+    std::uint64_t last_key = ~std::uint64_t{0};
+    std::uint32_t last_block = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint64_t k = blockKey(voxels[i].index.x() >> kShift, voxels[i].index.y() >> kShift);
+      if (k != last_key) {
+        last_key = k;
+        last_block = blocks_.try_emplace(k, static_cast<std::uint32_t>(blocks_.size())).first->second;
+      }
+      block_[i] = last_block;
+    }
+    // ids by (block, column), then by z inside each column
+    const std::size_t cells = blocks_.size() * kColumns;
+    start_.assign(cells + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start_[slot(i, voxels) + 1];
+    for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
+    order_.resize(n);
+    {
+      std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+      for (std::uint32_t i = 0; i < n; ++i) order_[fill[slot(i, voxels)]++] = i;
+    }
+    z_.resize(n);
+    tbb::parallel_for(std::size_t{0}, cells, [&](std::size_t c) {
+      const auto b = order_.begin() + start_[c], e = order_.begin() + start_[c + 1];
+      if (e - b > 1) std::sort(b, e, [&](std::uint32_t a, std::uint32_t d) { return voxels[a].index.z() < voxels[d].index.z(); });
+      for (auto k = start_[c]; k < start_[c + 1]; ++k) z_[k] = voxels[order_[k]].index.z();
+    });
+  }
+
+  // id of the voxel at (x, y, z), or -1; block: the block number of (x, y) if the caller knows it
+  std::int64_t find(int x, int y, int z, std::int64_t block = -1) const {
+    if (block < 0) {
+      const auto it = blocks_.find(blockKey(x >> kShift, y >> kShift));
+      if (it == blocks_.end()) return -1;
+      block = it->second;
+    }
+    const std::size_t c = static_cast<std::size_t>(block) * kColumns + local(x, y);
+    for (auto k = start_[c]; k < start_[c + 1] && z_[k] <= z; ++k) {
+      if (z_[k] == z) return order_[k];
+    }
+    return -1;
+  }
+  // the neighbours at +x, +y, +z of every voxel (-1: none), three per voxel id
+  std::vector<std::int64_t> forwardNeighbours(const std::vector<Voxel>& voxels, int threads) const {
+    std::vector<std::int64_t> next(3 * voxels.size(), -1);
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, start_.size() - 1, [&](std::size_t c) {
+        for (auto k = start_[c]; k < start_[c + 1]; ++k) {
+          const std::uint32_t i = order_[k];
+          const VoxelIndex& v = voxels[i].index;
+          // +z: the next voxel of the column, if it is right above
+          if (k + 1 < start_[c + 1] && z_[k + 1] == v.z() + 1) next[3 * i + 2] = order_[k + 1];
+          // +x, +y: in the same block unless the column is on its edge
+          constexpr int edge = (1 << kShift) - 1;
+          const std::int64_t b = block_[i];
+          next[3 * i + 0] = find(v.x() + 1, v.y(), v.z(), (v.x() & edge) != edge ? b : -1);
+          next[3 * i + 1] = find(v.x(), v.y() + 1, v.z(), (v.y() & edge) != edge ? b : -1);
+        }
+      });
+    });
+    return next;
+  }
+
+ private:
+  static constexpr int kShift = 5;                    // blocks of 32 x 32 columns
+  static constexpr std::size_t kColumns = 1u << (2 * kShift);
+  static std::uint64_t blockKey(int bx, int by) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx)) << 32) | static_cast<std::uint32_t>(by);
+  }
+  static std::size_t local(int x, int y) {
+    constexpr int mask = (1 << kShift) - 1;
+    return static_cast<std::size_t>((y & mask) << kShift | (x & mask));
+  }
+  std::size_t slot(std::size_t i, const std::vector<Voxel>& voxels) const {
+    return static_cast<std::size_t>(block_[i]) * kColumns + local(voxels[i].index.x(), voxels[i].index.y());
+  }
+
+  std::unordered_map<std::uint64_t, std::uint32_t> blocks_;
+  std::vector<std::uint32_t> block_;  // per voxel id
+  std::vector<std::uint32_t> start_;  // per (block, column): first position in order_
+  std::vector<std::uint32_t> order_;  // voxel ids by block, column, z
+  std::vector<std::int32_t> z_;       // z of order_[k]
 };
 
 }  // namespace
@@ -259,7 +380,8 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
   p.unary_ground.resize(n);
   p.unary_nonground.resize(n);
   p.parity.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+  arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     const auto& v = voxels[i];
     const double ground = h1.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
     out.ground_height[i] = static_cast<float>(ground);
@@ -271,29 +393,25 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
     p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
     p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
     p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
+  }); });
+  // neighbours at L1 distance 1: +x, +y, +z of every voxel, each voxel writing its own three
+  // slots, so the edge list (in voxel id order) does not depend on the thread count
+  const std::vector<std::int64_t> next = ColumnIndex(voxels).forwardNeighbours(voxels, cfg.threads);
+  // edges in voxel id order: each voxel's slots found by a prefix sum, then filled in parallel
+  std::vector<std::uint32_t> first(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
   }
-  // neighbours at L1 distance 1: look up +x, +y, +z of every voxel, each voxel writing its own
-  // three slots, so the edge list does not depend on the thread count
-  std::vector<std::int64_t> next(3 * n, -1);
-  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      for (int axis = 0; axis < 3; ++axis) {
-        VoxelIndex j = voxels[i].index;
-        j[axis] += 1;
-        next[3 * i + axis] = map.find(j);
-      }
-    });
-  });
-  p.edges.reserve(3 * n);
-  for (std::uint32_t i = 0; i < n; ++i) {
+  p.edges.resize(first[n]);
+  arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    std::uint32_t e = first[i];
     for (int axis = 0; axis < 3; ++axis) {
       const std::int64_t k = next[3 * i + axis];
       if (k < 0) continue;
       const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(voxels[i].height - voxels[k].height));
-      p.edges.push_back({i, static_cast<std::uint32_t>(k), w});
+      p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(k), w};
     }
-  }
+  }); });
   out.refined = out.rough;
   out.energy_rough = gmrfEnergy(p, out.rough);
   if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
