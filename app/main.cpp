@@ -129,6 +129,14 @@ void printScorecard(const nlohmann::json& r) {
   std::cout << "    cells that got an estimate: " << h["estimated_cells"]["after"]["cells"].get<std::size_t>() << ", MAE "
             << h["estimated_cells"]["before"]["mae_m"].get<double>() << " -> " << h["estimated_cells"]["after"]["mae_m"].get<double>()
             << " m; terrain cells wrongly raised: " << h["raised_terrain_cells"].get<std::size_t>() << "\n";
+  if (h.contains("by_kind")) {
+    std::cout << "    by kind:";
+    for (const auto& [kind, e] : h["by_kind"].items()) {
+      std::cout << " " << kind << " " << e["before"]["mae_m"].get<double>() << " -> " << e["after"]["mae_m"].get<double>() << " m ("
+                << e["after"]["cells"].get<std::size_t>() << " cells);";
+    }
+    std::cout << " sensed as terrain (under crowns): " << h["object_cells_sensed_as_terrain"].get<std::size_t>() << " cells\n";
+  }
   if (r["height_baselines"].contains("inpainting")) {
     const auto& b = r["height_baselines"];
     std::cout << "  height map over object cells     coverage  MAE m\n";

@@ -153,6 +153,8 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["raised_terrain_cells"] = h.raised_terrain_cells;
   for (const auto& [band, e] : h.by_band) hr["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   for (const auto& [id, e] : h.by_object) hr["by_object"][id] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  for (const auto& [kind, e] : h.by_kind) hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
 
   // height baselines on the height map: sensed only, inpainted, recovered
   r["height_baselines"] = json::object();

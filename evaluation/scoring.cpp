@@ -29,7 +29,7 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
                           const std::vector<Point3>& robot_path) {
   HeightScores out;
   std::vector<double> before, after, seen_before, seen_after;
-  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> bands, objects;
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> bands, objects, kinds;
   // geom -> object id
   std::map<int, std::string> owner;
   for (const auto& o : world.truth().objects) {
@@ -51,6 +51,9 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
     if (!v.estimates.empty()) seen_before.push_back(eb), seen_after.push_back(ea);
     const char* band = d < 30 ? "0-30" : d < 60 ? "30-60" : d < 100 ? "60-100" : nullptr;
     if (band) bands[band].first.push_back(eb), bands[band].second.push_back(ea);
+    auto& kind = kinds[world.geomClass(t.geom) == scenes::GeomClass::Building ? "building" : "tree"];
+    kind.first.push_back(eb), kind.second.push_back(ea);
+    out.sensed_as_terrain += v.sensed_height < t.terrain + 0.5;
     if (auto it = owner.find(t.geom); it != owner.end()) {
       objects[it->second].first.push_back(eb);
       objects[it->second].second.push_back(ea);
@@ -62,6 +65,7 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
   out.seen_after = errorStats(seen_after);
   for (const auto& [k, v] : bands) out.by_band[k] = {errorStats(v.first), errorStats(v.second)};
   for (const auto& [k, v] : objects) out.by_object[k] = {errorStats(v.first), errorStats(v.second)};
+  for (const auto& [k, v] : kinds) out.by_kind[k] = {errorStats(v.first), errorStats(v.second)};
   return out;
 }
 

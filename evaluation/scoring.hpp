@@ -24,6 +24,10 @@ struct HeightScores {
   ErrorStats before, after;  // over object cells: sensed-only heights, then after recovery
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_band;    // "0-30", "30-60", "60-100" [m]
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_object;  // object id
+  std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_kind;    // "building", "tree" (trunk or crown on top)
+  // object cells whose sensed top is the terrain under the object (ground under a tree crown):
+  // their vertex is ground, so boundary estimation, which raises non-ground vertices, cannot reach them
+  std::size_t sensed_as_terrain = 0;
   ErrorStats seen_before, seen_after;  // object cells that received at least one estimate
   std::size_t raised_terrain_cells = 0;  // cells raised although terrain is their true top
 };
