@@ -243,8 +243,35 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
 }
 
 // generate a scenario's scene into out/scene, simulate and reconstruct it into out
+// where the lidar comes from instead of the simulated rig or the dataset (--lidar, --calibration)
+struct LidarChoice {
+  std::string endpoint;  // pcap:FILE or udp:HOST:PORT; empty: no replacement
+  fs::path calibration;  // empty: the other source's laser table
+  rig::VelodyneOptions options;
+};
+
+// the pipeline over `others` with its lidar replaced by Velodyne packets
+nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, const LidarChoice& lidar_choice,
+                                    const PipelineConfig& pipe_cfg, const fs::path& out, const sim::World* world) {
+  const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
+  rig::LaserCalibration lasers =
+      lidar_choice.calibration.empty() ? others->lasers() : rig::loadLaserCalibration(lidar_choice.calibration);
+  auto lidar = std::make_unique<rig::VelodyneLidar>(endpoint, std::move(lasers), lidar_choice.options);
+  if (endpoint.kind == rig::LidarEndpoint::Kind::Udp) {
+    std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe() << "\n";
+  }
+  rig::LidarSwapSource source(std::move(others), std::move(lidar));
+  nlohmann::json report = reconstruct(source, pipe_cfg, out, world);
+  std::cout << "lidar " << source.lidar().summary() << "\n";
+  if (source.pointsWithoutTruth() > 0) {
+    std::cout << "  " << source.pointsWithoutTruth() << " decoded points had no partner in the other source's truth (not scored)\n";
+  }
+  return report;
+}
+
 nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int frames, const sim::SimConfig& sim_cfg,
-                           const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet) {
+                           const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet,
+                           const LidarChoice* lidar = nullptr) {
   io::prepareOutputDir(out, force);
   scenes::SceneConfig scene_cfg;
   scene_cfg.type = type;
@@ -252,6 +279,10 @@ nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int fram
   const fs::path scene_path = out / "scene" / (type + "_" + std::to_string(seed) + ".xml");
   scenes::writeScene(scenes::generateScene(scene_cfg), scene_path, force);
   auto world = std::make_shared<sim::World>(scene_path);
+  if (lidar && !lidar->endpoint.empty()) {
+    // camera, GPS and gyro simulated, the lidar from packets (for example 'terrain stream --scene')
+    return reconstructWithLidar(std::make_unique<sim::SimulatedRig>(world, sim_cfg, frames), *lidar, pipe_cfg, out, world.get());
+  }
   sim::SimulatedRig rig(world, sim_cfg, frames);
   return reconstruct(rig, pipe_cfg, out, world.get(), quiet);
 }
@@ -354,22 +385,39 @@ int stream(const fs::path& pcap_path, const fs::path& scene_path, int frames, co
     }
     std::cerr << "stream: " << reader.stats().summary() << "\n";
   } else {
-    // a simulated run, simulated as it is sent (no camera: only the lidar goes out)
+    // a simulated run (no camera: only the lidar goes out), simulated on its own thread a few
+    // sweeps ahead of the sending
     sim::SimConfig cfg = config;
     cfg.camera.enabled = false;
     auto world = std::make_shared<sim::World>(scene_path);
     sim::SimulatedRig rig(world, cfg, frames);
     rig::velodyne::PacketEncoder encoder(rig.lasers(), rig.firingsPerTurn());
-    std::vector<rig::velodyne::TimedPacket> packets;
-    while (auto frame = rig.next()) {
-      encoder.addSweep(frame->sensors.sweep, packets);
-      late += sendPaced(out, packets, 0.0, t0, speed);
-      sent += static_cast<long long>(packets.size());
-      packets.clear();
+    app::BoundedQueue<std::vector<rig::velodyne::TimedPacket>> queue(4);
+    std::exception_ptr error;
+    std::thread simulation([&] {
+      try {
+        while (auto frame = rig.next()) {
+          std::vector<rig::velodyne::TimedPacket> packets;
+          encoder.addSweep(frame->sensors.sweep, packets);
+          if (!queue.push(std::move(packets))) break;
+        }
+        std::vector<rig::velodyne::TimedPacket> last;
+        encoder.finish(last);
+        queue.push(std::move(last));
+      } catch (...) {
+        error = std::current_exception();
+      }
+      queue.close();
+    });
+    // the first sweep is simulated before the clock starts
+    auto first = queue.pop();
+    const auto start = std::chrono::steady_clock::now();
+    for (auto packets = std::move(first); packets; packets = queue.pop()) {
+      late += sendPaced(out, *packets, 0.0, start, speed);
+      sent += static_cast<long long>(packets->size());
     }
-    encoder.finish(packets);
-    late += sendPaced(out, packets, 0.0, t0, speed);
-    sent += static_cast<long long>(packets.size());
+    simulation.join();
+    if (error) std::rethrow_exception(error);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << "sent " << sent << " packets to " << target.host << ":" << target.port << " in " << std::fixed
@@ -431,19 +479,20 @@ int main(int argc, char** argv) {
   recon->add_option("--input", recon_input, "dataset directory (from 'terrain record')")->required();
   recon->add_option("--out", recon_out, "output directory")->required();
   recon->add_flag("--force", recon_force, "write into an existing, non-empty directory");
-  std::string recon_lidar;
-  fs::path recon_calibration;
-  rig::VelodyneOptions recon_velodyne;
-  recon->add_option("--lidar", recon_lidar,
-                    "take the lidar from a Velodyne instead of the dataset: pcap:FILE (a capture) or udp:HOST:PORT "
-                    "(live packets, e.g. udp:0.0.0.0:2368); camera, GPS and gyro still come from --input, matched by time");
-  recon->add_option("--calibration", recon_calibration,
-                    "laser calibration for --lidar (ROS YAML or db.xml); default: the dataset's lasers.yaml");
-  recon->add_option("--lidar-time-base", recon_velodyne.decoder.time_base,
-                    "[s] added to the packets' time since the top of the hour, to match the other sensors' clock")
-      ->capture_default_str();
-  recon->add_option("--lidar-idle-timeout", recon_velodyne.idle_timeout,
-                    "[s] a live lidar stream ends after this long without packets")->capture_default_str();
+  LidarChoice lidar_choice;
+  auto addLidarOptions = [&lidar_choice](CLI::App& cmd, const std::string& others) {
+    cmd.add_option("--lidar", lidar_choice.endpoint,
+                   "take the lidar from a Velodyne: pcap:FILE (a capture) or udp:HOST:PORT (live packets, e.g. "
+                   "udp:0.0.0.0:2368); camera, GPS and gyro still come from " + others + ", matched by time");
+    cmd.add_option("--calibration", lidar_choice.calibration,
+                   "laser calibration for --lidar (ROS YAML or db.xml); default: the laser table of " + others);
+    cmd.add_option("--lidar-time-base", lidar_choice.options.decoder.time_base,
+                   "[s] added to the packets' time since the top of the hour, to match the other sensors' clock")
+        ->capture_default_str();
+    cmd.add_option("--lidar-idle-timeout", lidar_choice.options.idle_timeout,
+                   "[s] a live lidar stream ends after this long without packets")->capture_default_str();
+  };
+  addLidarOptions(*recon, "the dataset");
 
   // terrain evaluate
   CLI::App* evalc = app.add_subcommand("evaluate", "score a finished run (of 'terrain run' or 'terrain reconstruct') again: report.json and report.html");
@@ -478,6 +527,7 @@ int main(int argc, char** argv) {
   run->add_option("--frames", run_frames, "lidar sweeps to simulate")->capture_default_str();
   run->add_option("--out", run_out, "output directory")->capture_default_str();
   run->add_flag("--force", run_force, "write into an existing, non-empty directory");
+  addLidarOptions(*run, "the simulated rig");
   try {
     if (!config_file.empty()) sim::loadSimConfig(config_file, sim_cfg);
     if (!pipe_config_file.empty()) app::loadPipelineConfig(pipe_config_file, pipe_cfg);
@@ -551,31 +601,22 @@ int main(int argc, char** argv) {
       if (producer.contains("scene") && producer["scene"].is_string() && fs::exists(producer["scene"].get<std::string>())) {
         world = std::make_shared<sim::World>(producer["scene"].get<std::string>());
       }
-      if (recon_lidar.empty()) {
-        if (!recon_calibration.empty()) throw io::InputError("--calibration applies to --lidar only");
+      if (lidar_choice.endpoint.empty()) {
+        if (!lidar_choice.calibration.empty()) throw io::InputError("--calibration applies to --lidar only");
         io::prepareOutputDir(recon_out, recon_force);
         reconstruct(*dataset, pipe_cfg, recon_out, world.get());
         return 0;
       }
       // the real-driver path: the lidar from packets, everything else from the dataset
-      const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(recon_lidar);
-      rig::LaserCalibration lasers = recon_calibration.empty() ? dataset->lasers() : rig::loadLaserCalibration(recon_calibration);
-      auto lidar = std::make_unique<rig::VelodyneLidar>(endpoint, std::move(lasers), recon_velodyne);
+      rig::LidarEndpoint::parse(lidar_choice.endpoint);  // a bad endpoint is refused before anything is written
       io::prepareOutputDir(recon_out, recon_force);
-      if (endpoint.kind == rig::LidarEndpoint::Kind::Udp) {
-        std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe() << "\n";
-      }
-      rig::LidarSwapSource source(std::move(dataset), std::move(lidar));
-      reconstruct(source, pipe_cfg, recon_out, world.get());
-      std::cout << "lidar " << source.lidar().summary() << "\n";
-      if (source.pointsWithoutTruth() > 0) {
-        std::cout << "  " << source.pointsWithoutTruth() << " decoded points had no partner in the dataset's truth (not scored)\n";
-      }
+      reconstructWithLidar(std::move(dataset), lidar_choice, pipe_cfg, recon_out, world.get());
       return 0;
     }
     if (run->parsed()) {
       applyChoices(pipe_cfg, histogram, solver);
-      runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false);
+      if (!lidar_choice.endpoint.empty()) rig::LidarEndpoint::parse(lidar_choice.endpoint);
+      runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false, &lidar_choice);
       return 0;
     }
     if (kitti->parsed()) {

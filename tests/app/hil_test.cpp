@@ -86,6 +86,31 @@ TEST_F(HilTest, LoopbackUdpStreamScoresLikeTheDataset) {
   EXPECT_NE(text.find("4166 packets, 4166 decoded"), std::string::npos) << text;
 }
 
+TEST_F(HilTest, SimulatedRigWithAStreamedLidarScoresLikeTheInProcessRun) {
+  // 'terrain run --lidar udp:…': camera, GPS and gyro simulated, the lidar streamed by
+  // 'terrain stream --scene' from the same scene
+  std::uint16_t port;
+  {
+    rig::UdpReceiver probe("127.0.0.1", 0);
+    port = probe.port();
+  }
+  const fs::path out = *dir_ / "run_udp", ref = *dir_ / "run_ref", log = *dir_ / "run_udp.log";
+  std::thread receiver([&] {
+    sh(kCli + " run --scenario urban --seed 1 --frames 8 --lidar udp:127.0.0.1:" + std::to_string(port) +
+       " --lidar-idle-timeout 1 --out " + out.string() + " > " + log.string() + " 2>&1");
+  });
+  const fs::path scene = out / "scene" / "urban_1.xml";
+  for (int i = 0; i < 600; ++i) {
+    if (fs::exists(log) && io::readFile(log).find("listening") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(0, sh(kCli + " stream --scene " + scene.string() + " --frames 8 --to 127.0.0.1:" + std::to_string(port) + " > /dev/null 2>&1"));
+  receiver.join();
+  ASSERT_EQ(0, sh(kCli + " run --scenario urban --seed 1 --frames 8 --out " + ref.string() + " > /dev/null 2>&1"));
+  ASSERT_TRUE(fs::exists(out / "report.json")) << io::readFile(log);
+  expectSameScores(report(ref), report(out));
+}
+
 TEST_F(HilTest, BadLidarArgumentsGetAClearError) {
   const std::string base = kCli + " reconstruct --input " + ds().string() + " --out " + (*dir_ / "bad").string();
   const fs::path log = *dir_ / "bad.log";
