@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace terrain {
 
@@ -93,6 +94,59 @@ int solveIcm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_it
 
 namespace {
 
+struct Plane {
+  double a = 0, b = 0, c = 0;  // z = a x + b y + c
+  double at(double x, double y) const { return a * x + b * y + c; }
+};
+
+int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// sums of a point set, relative to a reference point near it, for least squares in one pass
+struct Moments {
+  double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0;
+  double zmin = std::numeric_limits<double>::infinity();
+  void add(const Point3& p, const Point3& ref) {
+    const double dx = p.x() - ref.x(), dy = p.y() - ref.y(), dz = p.z() - ref.z();
+    n += 1, x += dx, y += dy, z += dz, xx += dx * dx, xy += dx * dy, yy += dy * dy, xz += dx * dz, yz += dy * dz;
+    zmin = std::min(zmin, p.z());
+  }
+  // the least-squares plane z = a x + b y + c (normal equations, centred); a steeper plane than
+  // 35 degrees is not terrain: level at the lowest point instead
+  Plane plane(const Point3& ref) const {
+    const double mx = x / n, my = y / n, mz = z / n;
+    Eigen::Matrix2d ata;
+    ata << xx - n * mx * mx, xy - n * mx * my, xy - n * mx * my, yy - n * my * my;
+    const Eigen::Vector2d atb(xz - n * mx * mz, yz - n * my * mz);
+    Eigen::Vector2d ab = Eigen::Vector2d::Zero();
+    if (std::abs(ata.determinant()) > 1e-9) ab = ata.ldlt().solve(atb);
+    Plane p{ab.x(), ab.y(), ref.z() + mz - ab.x() * (ref.x() + mx) - ab.y() * (ref.y() + my)};
+    if (std::hypot(p.a, p.b) > 0.7) p = {0, 0, zmin};
+    return p;
+  }
+};
+
+// least squares in three rounds, each fitted to the points the previous plane left within
+// 1.0 m, then 0.7 m; one pass over the points per round
+Plane fitPlane(std::vector<Point3> pts) {
+  if (pts.size() < 3) return pts.empty() ? Plane{} : Plane{0, 0, pts.front().z()};
+  const Point3 ref = pts.front();
+  Moments all;
+  for (const auto& p : pts) all.add(p, ref);
+  Plane plane = all.plane(ref);
+  for (int round = 1; round < 3; ++round) {
+    const double limit = 1.0 - 0.3 * (round - 1);
+    Moments near;
+    std::size_t kept = 0;
+    for (std::size_t r = 0; r < pts.size(); ++r) {
+      if (std::abs(pts[r].z() - plane.at(pts[r].x(), pts[r].y())) < limit) near.add(pts[r], ref), pts[kept++] = pts[r];
+    }
+    if (kept < 3) break;
+    pts.resize(kept);
+    plane = near.plane(ref);
+  }
+  return plane;
+}
+
 // h1 as a function of position, from one histogram or from tiles
 class GroundHeight {
  public:
@@ -160,7 +214,9 @@ class GroundHeight {
       for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
         for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
           const int ux = tx + dx, uy = ty + dy;
-          if (ux >= 0 && uy >= 0 && ux < nx_ && uy < ny_) window += start[static_cast<std::size_t>(uy) * nx_ + ux + 1] - start[static_cast<std::size_t>(uy) * nx_ + ux];
+          if (ux >= 0 && uy >= 0 && ux < nx_ && uy < ny_)
+            window +=
+                start[static_cast<std::size_t>(uy) * nx_ + ux + 1] - start[static_cast<std::size_t>(uy) * nx_ + ux];
         }
       }
       residual.reserve(window);
@@ -200,60 +256,8 @@ class GroundHeight {
   }
 
  private:
-  struct Plane {
-    double a = 0, b = 0, c = 0;  // z = a x + b y + c
-    double at(double x, double y) const { return a * x + b * y + c; }
-  };
-
-  static int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
   std::size_t tileOf(const VoxelIndex& i) const {
     return static_cast<std::size_t>(floorDiv(i.y(), k_) - ty0_) * nx_ + (floorDiv(i.x(), k_) - tx0_);
-  }
-
-  // sums of a point set, relative to a reference point near it, for least squares in one pass
-  struct Moments {
-    double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0;
-    double zmin = std::numeric_limits<double>::infinity();
-    void add(const Point3& p, const Point3& ref) {
-      const double dx = p.x() - ref.x(), dy = p.y() - ref.y(), dz = p.z() - ref.z();
-      n += 1, x += dx, y += dy, z += dz, xx += dx * dx, xy += dx * dy, yy += dy * dy, xz += dx * dz, yz += dy * dz;
-      zmin = std::min(zmin, p.z());
-    }
-    // the least-squares plane z = a x + b y + c (normal equations, centred); a steeper plane than
-    // 35 degrees is not terrain: level at the lowest point instead
-    Plane plane(const Point3& ref) const {
-      const double mx = x / n, my = y / n, mz = z / n;
-      Eigen::Matrix2d ata;
-      ata << xx - n * mx * mx, xy - n * mx * my, xy - n * mx * my, yy - n * my * my;
-      const Eigen::Vector2d atb(xz - n * mx * mz, yz - n * my * mz);
-      Eigen::Vector2d ab = Eigen::Vector2d::Zero();
-      if (std::abs(ata.determinant()) > 1e-9) ab = ata.ldlt().solve(atb);
-      Plane p{ab.x(), ab.y(), ref.z() + mz - ab.x() * (ref.x() + mx) - ab.y() * (ref.y() + my)};
-      if (std::hypot(p.a, p.b) > 0.7) p = {0, 0, zmin};
-      return p;
-    }
-  };
-
-  // least squares in three rounds, each fitted to the points the previous plane left within
-  // 1.0 m, then 0.7 m; one pass over the points per round
-  static Plane fitPlane(std::vector<Point3> pts) {
-    if (pts.size() < 3) return pts.empty() ? Plane{} : Plane{0, 0, pts.front().z()};
-    const Point3 ref = pts.front();
-    Moments all;
-    for (const auto& p : pts) all.add(p, ref);
-    Plane plane = all.plane(ref);
-    for (int round = 1; round < 3; ++round) {
-      const double limit = 1.0 - 0.3 * (round - 1);
-      Moments near;
-      std::size_t kept = 0;
-      for (std::size_t r = 0; r < pts.size(); ++r) {
-        if (std::abs(pts[r].z() - plane.at(pts[r].x(), pts[r].y())) < limit) near.add(pts[r], ref), pts[kept++] = pts[r];
-      }
-      if (kept < 3) break;
-      pts.resize(kept);
-      plane = near.plane(ref);
-    }
-    return plane;
   }
 
   GroundSegmentationConfig cfg_;
@@ -296,7 +300,8 @@ class ColumnIndex {
     z_.resize(n);
     tbb::parallel_for(std::size_t{0}, cells, [&](std::size_t c) {
       const auto b = order_.begin() + start_[c], e = order_.begin() + start_[c + 1];
-      if (e - b > 1) std::sort(b, e, [&](std::uint32_t a, std::uint32_t d) { return voxels[a].index.z() < voxels[d].index.z(); });
+      if (e - b > 1)
+        std::sort(b, e, [&](std::uint32_t a, std::uint32_t d) { return voxels[a].index.z() < voxels[d].index.z(); });
       for (auto k = start_[c]; k < start_[c + 1]; ++k) z_[k] = voxels[order_[k]].index.z();
     });
   }
@@ -337,7 +342,7 @@ class ColumnIndex {
   }
 
  private:
-  static constexpr int kShift = 5;                    // blocks of 32 x 32 columns
+  static constexpr int kShift = 5;  // blocks of 32 x 32 columns
   static constexpr std::size_t kColumns = 1u << (2 * kShift);
   static std::uint64_t blockKey(int bx, int by) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx)) << 32) | static_cast<std::uint32_t>(by);
@@ -362,7 +367,8 @@ class ColumnIndex {
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& cfg) {
   SegmentationResult out = segmentGroundLabels(map, cfg);
   auto& voxels = map.voxels();
-  for (std::size_t i = 0; i < voxels.size(); ++i) voxels[i].label = out.refined[i] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+  for (std::size_t i = 0; i < voxels.size(); ++i)
+    voxels[i].label = out.refined[i] ? VoxelLabel::Ground : VoxelLabel::NonGround;
   return out;
 }
 
@@ -381,19 +387,21 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
   p.unary_nonground.resize(n);
   p.parity.resize(n);
   tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
-  arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const auto& v = voxels[i];
-    const double ground = h1.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
-    out.ground_height[i] = static_cast<float>(ground);
-    const double d = v.height - ground;
-    const bool g1 = std::abs(d) <= cfg.delta;
-    const bool in_range = std::abs(d) <= cfg.range_margin;
-    out.rough[i] = g1;
-    // Eq. 19 (rough class) + Eq. 20 (height range)
-    p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
-    p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
-    p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
-  }); });
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      const auto& v = voxels[i];
+      const double ground = h1.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
+      out.ground_height[i] = static_cast<float>(ground);
+      const double d = v.height - ground;
+      const bool g1 = std::abs(d) <= cfg.delta;
+      const bool in_range = std::abs(d) <= cfg.range_margin;
+      out.rough[i] = g1;
+      // Eq. 19 (rough class) + Eq. 20 (height range)
+      p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
+      p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
+      p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
+    });
+  });
   // neighbours at L1 distance 1: +x, +y, +z of every voxel, each voxel writing its own three
   // slots, so the edge list (in voxel id order) does not depend on the thread count
   const std::vector<std::int64_t> next = ColumnIndex(voxels).forwardNeighbours(voxels, cfg.threads);
@@ -403,15 +411,17 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
     first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
   }
   p.edges.resize(first[n]);
-  arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    std::uint32_t e = first[i];
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::int64_t k = next[3 * i + axis];
-      if (k < 0) continue;
-      const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(voxels[i].height - voxels[k].height));
-      p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(k), w};
-    }
-  }); });
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      std::uint32_t e = first[i];
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::int64_t k = next[3 * i + axis];
+        if (k < 0) continue;
+        const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(voxels[i].height - voxels[k].height));
+        p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(k), w};
+      }
+    });
+  });
   out.refined = out.rough;
   out.energy_rough = gmrfEnergy(p, out.rough);
   if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
@@ -421,6 +431,262 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
   }
   out.energy_refined = gmrfEnergy(p, out.refined);
   return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// incremental
+
+namespace {
+
+std::uint64_t tileKey(int tx, int ty) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(tx)) << 32) | static_cast<std::uint32_t>(ty);
+}
+
+}  // namespace
+
+struct IncrementalGroundSegmentation::State {
+  GroundSegmentationConfig cfg;
+  double cell = 0;
+  int k = 0;  // columns per tile edge
+  struct Tile {
+    int tx = 0, ty = 0;
+    std::vector<std::uint32_t> ids;  // in id order
+    std::vector<Point3> lowest;      // the lowest voxel of every column, rows then columns
+    Plane plane;
+  };
+  std::unordered_map<std::uint64_t, Tile> tiles;
+  std::unordered_set<std::uint64_t> touched;
+  std::size_t taken = 0;  // voxels already placed in tiles
+  SegmentationResult result;
+  Stats stats;
+  std::vector<std::int32_t> local;  // voxel id -> index in the current subproblem, -1 outside
+
+  void setCell(double voxel_size) {
+    if (cell == voxel_size) return;
+    cell = voxel_size;
+    k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
+  }
+  std::pair<int, int> tileOf(const VoxelIndex& i) const { return {floorDiv(i.x(), k), floorDiv(i.y(), k)}; }
+
+  // the lowest voxel of every column of a tile, in the order GroundHeight lists them
+  void findLowest(Tile& t, const std::vector<Voxel>& voxels) const {
+    std::vector<float> low(static_cast<std::size_t>(k) * k, std::numeric_limits<float>::infinity());
+    const int cx = t.tx * k, cy = t.ty * k;
+    for (std::uint32_t id : t.ids) {
+      const auto& v = voxels[id];
+      float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k + (v.index.x() - cx)];
+      l = std::min(l, v.height);
+    }
+    t.lowest.clear();
+    for (int r = 0; r < k; ++r) {
+      for (int c = 0; c < k; ++c) {
+        const float l = low[static_cast<std::size_t>(r) * k + c];
+        if (std::isfinite(l)) t.lowest.emplace_back((cx + c + 0.5) * cell, (cy + r + 0.5) * cell, l);
+      }
+    }
+  }
+
+  // the plane of one tile, as GroundHeight fits it: through the lowest voxel of every column of
+  // its window, then raised to the peak of the window's heights above it
+  Plane windowPlane(const Tile& t, const std::vector<Voxel>& voxels) const {
+    std::vector<const Tile*> window;
+    for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+      for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+        auto it = tiles.find(tileKey(t.tx + dx, t.ty + dy));
+        if (it != tiles.end()) window.push_back(&it->second);
+      }
+    }
+    std::vector<Point3> candidates;
+    std::size_t count = 0;
+    for (const Tile* u : window) {
+      candidates.insert(candidates.end(), u->lowest.begin(), u->lowest.end());
+      count += u->ids.size();
+    }
+    Plane plane = fitPlane(std::move(candidates));
+    std::vector<double> residual;
+    residual.reserve(count);
+    for (const Tile* u : window) {
+      for (std::uint32_t id : u->ids) {
+        const auto& v = voxels[id];
+        residual.push_back(v.height - plane.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell));
+      }
+    }
+    plane.c += histogramPeak(residual, cfg.bin_size);
+    return plane;
+  }
+};
+
+IncrementalGroundSegmentation::IncrementalGroundSegmentation(const GroundSegmentationConfig& config)
+    : state_(std::make_unique<State>()) {
+  state_->cfg = config;
+}
+
+IncrementalGroundSegmentation::~IncrementalGroundSegmentation() = default;
+
+const SegmentationResult& IncrementalGroundSegmentation::result() const { return state_->result; }
+const IncrementalGroundSegmentation::Stats& IncrementalGroundSegmentation::lastStats() const { return state_->stats; }
+
+void IncrementalGroundSegmentation::touch(const std::vector<Point3>& points, double voxel_size) {
+  State& st = *state_;
+  st.setCell(voxel_size);
+  std::uint64_t last = ~std::uint64_t{0};
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const double fx = std::floor(p.x() / st.cell), fy = std::floor(p.y() / st.cell);
+    if (std::abs(fx) > 1e9 || std::abs(fy) > 1e9) continue;
+    const std::uint64_t key = tileKey(floorDiv(static_cast<int>(fx), st.k), floorDiv(static_cast<int>(fy), st.k));
+    if (key != last) st.touched.insert(key), last = key;
+  }
+}
+
+void IncrementalGroundSegmentation::update(VoxelMap& map) {
+  State& st = *state_;
+  const auto& cfg = st.cfg;
+  st.stats = Stats{};
+  if (cfg.histogram == GroundSegmentationConfig::Histogram::Global) {
+    st.result = segmentGround(map, cfg);
+    st.taken = map.size();
+    st.touched.clear();
+    st.stats.voxels = map.size();
+    return;
+  }
+  st.setCell(map.voxelSize());
+  auto& voxels = map.voxels();
+  const std::size_t n = voxels.size();
+  // take in the new voxels
+  for (std::size_t id = st.taken; id < n; ++id) {
+    const auto [tx, ty] = st.tileOf(voxels[id].index);
+    const std::uint64_t key = tileKey(tx, ty);
+    State::Tile& t = st.tiles[key];
+    if (t.ids.empty()) t.tx = tx, t.ty = ty;
+    t.ids.push_back(static_cast<std::uint32_t>(id));
+    st.touched.insert(key);
+  }
+  st.taken = n;
+  SegmentationResult& out = st.result;
+  out.rough.resize(n, 0);
+  out.refined.resize(n, 0);
+  out.ground_height.resize(n, 0.0f);
+  st.local.resize(n, -1);
+  st.stats.touched_tiles = st.touched.size();
+  // the tiles whose window reaches a touched tile, in a fixed order
+  std::vector<std::uint64_t> keys;
+  {
+    std::unordered_set<std::uint64_t> seen;
+    for (std::uint64_t key : st.touched) {
+      const int tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
+      const int ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
+      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+          const std::uint64_t u = tileKey(tx + dx, ty + dy);
+          if (st.tiles.count(u) && seen.insert(u).second) keys.push_back(u);
+        }
+      }
+    }
+    std::sort(keys.begin(), keys.end());
+  }
+  std::vector<State::Tile*> touched;
+  for (std::uint64_t key : st.touched) {
+    auto it = st.tiles.find(key);
+    if (it != st.tiles.end()) touched.push_back(&it->second);
+  }
+  st.touched.clear();
+  st.stats.refitted_tiles = keys.size();
+  if (keys.empty()) return;
+  std::vector<State::Tile*> refit;
+  for (std::uint64_t key : keys) refit.push_back(&st.tiles.at(key));
+  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t i) { st.findLowest(*touched[i], voxels); });
+  });
+  std::vector<Plane> planes(refit.size());
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, refit.size(),
+                      [&](std::size_t i) { planes[i] = st.windowPlane(*refit[i], voxels); });
+  });
+  for (std::size_t i = 0; i < refit.size(); ++i) refit[i]->plane = planes[i];
+  // the subproblem: every voxel of the refitted tiles
+  std::vector<std::uint32_t> ids;
+  std::vector<std::uint32_t> tile_start{0};
+  for (const State::Tile* t : refit) {
+    ids.insert(ids.end(), t->ids.begin(), t->ids.end());
+    tile_start.push_back(static_cast<std::uint32_t>(ids.size()));
+  }
+  const std::size_t m = ids.size();
+  st.stats.voxels = m;
+  for (std::size_t i = 0; i < m; ++i) st.local[ids[i]] = static_cast<std::int32_t>(i);
+  GmrfProblem p;
+  p.unary_ground.resize(m);
+  p.unary_nonground.resize(m);
+  p.parity.resize(m);
+  std::vector<std::uint8_t> rough(m);
+  std::vector<Voxel> sub(m);
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, refit.size(), [&](std::size_t ti) {
+      const State::Tile& tile = *refit[ti];
+      const int tx = tile.tx, ty = tile.ty;
+      for (std::size_t i = tile_start[ti]; i < tile_start[ti + 1]; ++i) {
+        const auto& v = voxels[ids[i]];
+        sub[i] = v;
+        const double ground = tile.plane.at((v.index.x() + 0.5) * st.cell, (v.index.y() + 0.5) * st.cell);
+        out.ground_height[ids[i]] = static_cast<float>(ground);
+        const double d = v.height - ground;
+        const bool g1 = std::abs(d) <= cfg.delta;
+        const bool in_range = std::abs(d) <= cfg.range_margin;
+        rough[i] = g1;
+        out.rough[ids[i]] = g1;
+        p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
+        p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
+        p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
+        // neighbours outside the subproblem keep their labels: their pair terms become unary terms
+        // (only columns on a tile's edge have neighbours in another tile)
+        const int lx = v.index.x() - tx * st.k, ly = v.index.y() - ty * st.k;
+        for (const VoxelIndex& d4 :
+             {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
+          const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
+          if (l >= 0 && l < st.k) continue;
+          const std::int64_t j = map.find(v.index + d4);
+          if (j < 0 || st.local[j] >= 0) continue;
+          const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(v.height - voxels[j].height));
+          const bool ground_j = out.refined[j] != 0;
+          p.unary_ground[i] += ground_j ? -w : w;
+          p.unary_nonground[i] += ground_j ? w : -w;
+        }
+      }
+    });
+  });
+  const std::vector<std::int64_t> next = ColumnIndex(sub).forwardNeighbours(sub, cfg.threads);
+  std::vector<std::uint32_t> first(m + 1, 0);
+  for (std::size_t i = 0; i < m; ++i) {
+    first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
+  }
+  p.edges.resize(first[m]);
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, m, [&](std::size_t i) {
+      std::uint32_t e = first[i];
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::int64_t j = next[3 * i + axis];
+        if (j < 0) continue;
+        const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(sub[i].height - sub[j].height));
+        p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), w};
+      }
+    });
+  });
+  std::vector<std::uint8_t> labels = rough;
+  out.energy_rough = gmrfEnergy(p, rough);
+  if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
+    solveMinCut(p, labels);
+    out.iterations = 0;
+  } else {
+    out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
+  }
+  out.energy_refined = gmrfEnergy(p, labels);
+  out.tiles = static_cast<int>(st.tiles.size());
+  for (std::size_t i = 0; i < m; ++i) {
+    out.refined[ids[i]] = labels[i];
+    voxels[ids[i]].label = labels[i] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+    st.local[ids[i]] = -1;
+  }
 }
 
 }  // namespace terrain

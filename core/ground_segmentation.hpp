@@ -18,6 +18,7 @@
 
 #include "core/voxel_map.hpp"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,38 @@ struct SegmentationResult {
   double energy_rough = 0, energy_refined = 0;
   int iterations = 0;
   int tiles = 0;                      // local histograms used (1 for global)
+};
+
+// Keeps the segmentation of a growing map current frame by frame, at a cost that follows the
+// sensor's footprint rather than the map's size (local histogram only; with the global one every
+// update segments the whole map). Tiles that points fell into since the last update are
+// re-segmented: their ground planes, and those of the tiles whose window reaches them, are refitted
+// exactly as segmentGroundLabels fits them, and the GMRF is solved over the voxels of the refitted
+// tiles with the labels of their neighbours outside held fixed.
+class IncrementalGroundSegmentation {
+ public:
+  explicit IncrementalGroundSegmentation(const GroundSegmentationConfig& config);
+  ~IncrementalGroundSegmentation();
+  IncrementalGroundSegmentation(const IncrementalGroundSegmentation&) = delete;
+  IncrementalGroundSegmentation& operator=(const IncrementalGroundSegmentation&) = delete;
+
+  // Marks the tiles these world points [m] fall in (cells of voxel_size [m]) for the next update.
+  void touch(const std::vector<Point3>& points, double voxel_size);
+  // Re-segments the touched tiles, taking in the voxels added to the map since the last update;
+  // writes the labels of the re-segmented voxels into the map.
+  void update(VoxelMap& map);
+
+  // Per voxel id: rough, refined, ground_height. Energies and iterations are those of the last
+  // update's subproblem.
+  const SegmentationResult& result() const;
+  struct Stats {
+    std::size_t touched_tiles = 0, refitted_tiles = 0, voxels = 0;  // voxels re-segmented
+  };
+  const Stats& lastStats() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 // Segments every voxel of the map; the map is not changed.

@@ -16,7 +16,11 @@ double msSince(Clock::time_point t) { return std::chrono::duration<double, std::
 }  // namespace
 
 Pipeline::Pipeline(const RigCalibration& calibration, const PipelineConfig& config)
-    : calibration_(calibration), config_(config), poses_(calibration, config.pose), map_(config.voxel_map) {}
+    : calibration_(calibration),
+      config_(config),
+      poses_(calibration, config.pose),
+      map_(config.voxel_map),
+      incremental_(config.ground) {}
 
 void Pipeline::warn(const std::string& message) {
   if (warnings_.size() < 1000) warnings_.push_back(message);
@@ -53,10 +57,9 @@ void Pipeline::finish() {
       held_.pop_front();
     }
   }
-  if (dirty_) {
-    segmentation_ = segmentGround(map_, config_.ground);
-    dirty_ = false;
-  }
+  // the final labels from one segmentation of the whole map
+  if (!map_.voxels().empty()) segmentation_ = segmentGround(map_, config_.ground);
+  dirty_ = false;
   spreadEstimates(mesh_, map_, config_.estimation);
   for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
   if (!map_.voxels().empty()) {
@@ -120,7 +123,8 @@ void Pipeline::processReady(const SensorFrame& frame) {
   t = Clock::now();
   rec.new_voxels = map_.insert(world, static_cast<std::uint32_t>(frame.index), has_image ? &colours : nullptr);
   rec.voxels = map_.size();
-  dirty_ = dirty_ || rec.new_voxels > 0;
+  incremental_.touch(world, map_.voxelSize());
+  dirty_ = dirty_ || !world.empty();
   rec.voxel_ms = msSince(t);
 
   // terrain mesh
@@ -132,7 +136,8 @@ void Pipeline::processReady(const SensorFrame& frame) {
   t = Clock::now();
   ++processed_;
   if (dirty_ && processed_ % std::max(1, config_.segment_every) == 0) {
-    segmentation_ = segmentGround(map_, config_.ground);
+    // only the tiles this frame's points fell in, and their surroundings
+    incremental_.update(map_);
     dirty_ = false;
   }
   rec.segmentation_ms = msSince(t);

@@ -73,7 +73,8 @@ class Pipeline {
   PoseEstimator poses_;
   VoxelMap map_;
   TerrainMesh mesh_;
-  SegmentationResult segmentation_;
+  SegmentationResult segmentation_;          // of the whole map, from finish()
+  IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {
     SensorFrame frame;
     double pose_ms;  // time spent adding it to the pose estimator
@@ -84,7 +85,7 @@ class Pipeline {
   BoundaryImages last_boundaries_;
   int last_boundary_frame_ = -1;
   int processed_ = 0;
-  bool dirty_ = false;  // voxels added since the last segmentation
+  bool dirty_ = false;  // points added since the last segmentation
 };
 
 }  // namespace terrain

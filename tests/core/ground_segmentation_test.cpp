@@ -154,5 +154,80 @@ TEST(GroundSegmentationTest, LocalHistogramFollowsASlope) {
   EXPECT_GT(local, 0.97);
 }
 
+// rolling terrain 120 m x 60 m with walls every 20 m and posts, seen in four strips as a robot
+// driving along x would add them
+std::vector<std::vector<Point3>> strips() {
+  std::vector<std::vector<Point3>> out(4);
+  Random rng(5);
+  for (int x = 0; x < 600; ++x) {
+    for (int y = 0; y < 300; ++y) {
+      const double px = x * 0.2 + 0.1, py = y * 0.2 + 0.1;
+      const double ground = 0.8 * std::sin(px / 11) + 0.4 * std::cos(py / 7) + 0.02 * px;
+      auto& strip = out[static_cast<std::size_t>(x / 150)];
+      strip.emplace_back(px, py, ground + 0.01 * rng.normal());
+      if (x % 100 == 50 || (x % 37 == 0 && y % 41 == 0)) {
+        for (int z = 1; z < 12; ++z) strip.emplace_back(px, py, ground + z * 0.2);
+      }
+    }
+  }
+  // a second look at the first strip's far end while passing the second
+  for (const auto& p : out[0]) {
+    if (p.x() > 25) out[1].push_back(p + Point3(0, 0, 0.05));
+  }
+  return out;
+}
+
+TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentation) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  GroundSegmentationConfig cfg;
+  IncrementalGroundSegmentation inc(cfg);
+  std::size_t refitted_last = 0;
+  for (const auto& strip : strips()) {
+    map.insert(strip, 0);
+    inc.touch(strip, map.voxelSize());
+    inc.update(map);
+    refitted_last = inc.lastStats().refitted_tiles;
+  }
+  const SegmentationResult whole = segmentGroundLabels(map, cfg);
+  const SegmentationResult& part = inc.result();
+  ASSERT_EQ(part.refined.size(), map.size());
+  // the last strip touched only its own tiles and their neighbours
+  EXPECT_LT(refitted_last, static_cast<std::size_t>(whole.tiles));
+  // planes are refitted exactly as the whole-map segmentation fits them
+  std::size_t same_height = 0, same_rough = 0, same_refined = 0, ground = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    same_height += part.ground_height[i] == whole.ground_height[i];
+    same_rough += part.rough[i] == whole.rough[i];
+    same_refined += part.refined[i] == whole.refined[i];
+    ground += part.refined[i];
+  }
+  EXPECT_EQ(same_height, map.size());
+  EXPECT_EQ(same_rough, map.size());
+  // the GMRF solved tile group by tile group with fixed surroundings: nearly the same labels
+  EXPECT_GT(static_cast<double>(same_refined) / map.size(), 0.995) << same_refined << " of " << map.size();
+  EXPECT_GT(ground, map.size() / 2);
+  // and the labels are in the map
+  for (std::size_t i = 0; i < map.size(); i += 97) {
+    EXPECT_EQ(map.voxels()[i].label, part.refined[i] ? VoxelLabel::Ground : VoxelLabel::NonGround);
+  }
+}
+
+TEST(IncrementalGroundSegmentationTest, SameLabelsWhateverTheThreadCount) {
+  std::vector<std::uint8_t> labels[2];
+  for (int threads : {1, 2}) {
+    VoxelMap map(VoxelMapConfig{0.2});
+    GroundSegmentationConfig cfg;
+    cfg.threads = threads;
+    IncrementalGroundSegmentation inc(cfg);
+    for (const auto& strip : strips()) {
+      map.insert(strip, 0);
+      inc.touch(strip, map.voxelSize());
+      inc.update(map);
+    }
+    labels[threads - 1] = inc.result().refined;
+  }
+  EXPECT_EQ(labels[0], labels[1]);
+}
+
 }  // namespace
 }  // namespace terrain
