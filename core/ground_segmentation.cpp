@@ -268,6 +268,23 @@ class GroundHeight {
   std::vector<std::uint8_t> has_plane_;
 };
 
+// Eqs. 19-20 for voxel i of a problem, from its height above the ground height h1: the rough
+// class (true: G1) and the single-site terms
+bool setUnary(GmrfProblem& p, std::size_t i, const Voxel& v, double ground, const GroundSegmentationConfig& cfg) {
+  const double d = v.height - ground;
+  const bool g1 = std::abs(d) <= cfg.delta;
+  const bool in_range = std::abs(d) <= cfg.range_margin;
+  p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
+  p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
+  p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
+  return g1;
+}
+
+// the pair-site weight of two neighbouring voxels of heights a and b (Eqs. 21-22)
+double pairWeight(const GroundSegmentationConfig& cfg, float a, float b) {
+  return cfg.beta + cfg.gamma * std::exp(-std::abs(a - b));
+}
+
 // The voxel ids of the map ordered by column (in blocks of 32 x 32 columns) and height, for
 // finding the neighbours of every voxel with short, mostly cache-resident scans instead of one
 // hash-table probe per neighbour.
@@ -362,6 +379,31 @@ class ColumnIndex {
   std::vector<std::int32_t> z_;       // z of order_[k]
 };
 
+// the pair terms between neighbours at L1 distance 1 (+x, +y, +z of every voxel), in voxel order:
+// each voxel's slots found by a prefix sum, then filled in parallel, so the edge list does not
+// depend on the thread count
+void addPairTerms(GmrfProblem& p, const std::vector<Voxel>& voxels, const GroundSegmentationConfig& cfg,
+                  tbb::task_arena& arena) {
+  const std::size_t n = voxels.size();
+  const std::vector<std::int64_t> next = ColumnIndex(voxels).forwardNeighbours(voxels, cfg.threads);
+  std::vector<std::uint32_t> first(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
+  }
+  p.edges.resize(first[n]);
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      std::uint32_t e = first[i];
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::int64_t k = next[3 * i + axis];
+        if (k < 0) continue;
+        p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(k),
+                        pairWeight(cfg, voxels[i].height, voxels[k].height)};
+      }
+    });
+  });
+}
+
 }  // namespace
 
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& cfg) {
@@ -392,36 +434,10 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
       const auto& v = voxels[i];
       const double ground = h1.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
       out.ground_height[i] = static_cast<float>(ground);
-      const double d = v.height - ground;
-      const bool g1 = std::abs(d) <= cfg.delta;
-      const bool in_range = std::abs(d) <= cfg.range_margin;
-      out.rough[i] = g1;
-      // Eq. 19 (rough class) + Eq. 20 (height range)
-      p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
-      p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
-      p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
+      out.rough[i] = setUnary(p, i, v, ground, cfg);
     });
   });
-  // neighbours at L1 distance 1: +x, +y, +z of every voxel, each voxel writing its own three
-  // slots, so the edge list (in voxel id order) does not depend on the thread count
-  const std::vector<std::int64_t> next = ColumnIndex(voxels).forwardNeighbours(voxels, cfg.threads);
-  // edges in voxel id order: each voxel's slots found by a prefix sum, then filled in parallel
-  std::vector<std::uint32_t> first(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
-  }
-  p.edges.resize(first[n]);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      std::uint32_t e = first[i];
-      for (int axis = 0; axis < 3; ++axis) {
-        const std::int64_t k = next[3 * i + axis];
-        if (k < 0) continue;
-        const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(voxels[i].height - voxels[k].height));
-        p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(k), w};
-      }
-    });
-  });
+  addPairTerms(p, voxels, cfg, arena);
   out.refined = out.rough;
   out.energy_rough = gmrfEnergy(p, out.rough);
   if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
@@ -630,14 +646,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
         sub[i] = v;
         const double ground = tile.plane.at((v.index.x() + 0.5) * st.cell, (v.index.y() + 0.5) * st.cell);
         out.ground_height[ids[i]] = static_cast<float>(ground);
-        const double d = v.height - ground;
-        const bool g1 = std::abs(d) <= cfg.delta;
-        const bool in_range = std::abs(d) <= cfg.range_margin;
-        rough[i] = g1;
-        out.rough[ids[i]] = g1;
-        p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
-        p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
-        p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
+        rough[i] = out.rough[ids[i]] = setUnary(p, i, v, ground, cfg);
         // neighbours outside the subproblem keep their labels: their pair terms become unary terms
         // (only columns on a tile's edge have neighbours in another tile)
         const int lx = v.index.x() - tx * st.k, ly = v.index.y() - ty * st.k;
@@ -647,7 +656,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
           if (l >= 0 && l < st.k) continue;
           const std::int64_t j = map.find(v.index + d4);
           if (j < 0 || st.local[j] >= 0) continue;
-          const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(v.height - voxels[j].height));
+          const double w = pairWeight(cfg, v.height, voxels[j].height);
           const bool ground_j = out.refined[j] != 0;
           p.unary_ground[i] += ground_j ? -w : w;
           p.unary_nonground[i] += ground_j ? w : -w;
@@ -655,23 +664,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
       }
     });
   });
-  const std::vector<std::int64_t> next = ColumnIndex(sub).forwardNeighbours(sub, cfg.threads);
-  std::vector<std::uint32_t> first(m + 1, 0);
-  for (std::size_t i = 0; i < m; ++i) {
-    first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
-  }
-  p.edges.resize(first[m]);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, m, [&](std::size_t i) {
-      std::uint32_t e = first[i];
-      for (int axis = 0; axis < 3; ++axis) {
-        const std::int64_t j = next[3 * i + axis];
-        if (j < 0) continue;
-        const double w = cfg.beta + cfg.gamma * std::exp(-std::abs(sub[i].height - sub[j].height));
-        p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), w};
-      }
-    });
-  });
+  addPairTerms(p, sub, cfg, arena);
   std::vector<std::uint8_t> labels = rough;
   out.energy_rough = gmrfEnergy(p, rough);
   if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
