@@ -309,7 +309,7 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   std::unique_ptr<rig::pcap::Writer> capture;
   std::unique_ptr<rig::velodyne::PacketEncoder> encoder;
   std::vector<rig::velodyne::TimedPacket> packets;
-  auto sendPackets = [&] {
+  auto writePackets = [&] {
     for (const auto& p : packets) capture->write(rig::pcap::kSimulationEpoch + p.time, p.payload.data(), p.payload.size());
     packets.clear();
   };
@@ -325,13 +325,13 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
     writer.write(*frame);
     if (encoder) {
       encoder->addSweep(frame->sensors.sweep, packets);
-      sendPackets();
+      writePackets();
     }
     progress.update(frame->sensors.index + 1);
   }
   if (encoder) {
     encoder->finish(packets);
-    sendPackets();
+    writePackets();
     capture->close();
     const auto& st = encoder->stats();
     std::cout << "wrote lidar.pcap: " << st.packets << " HDL-64E packets, " << st.points << " returns";

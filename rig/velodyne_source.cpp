@@ -127,13 +127,13 @@ VelodyneLidar::VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration cal
     pcap_ = std::make_unique<pcap::Reader>(endpoint_.path, endpoint_.port);
   } else {
     udp_ = std::make_unique<UdpReceiver>(endpoint_.host, endpoint_.port);
+    buffer_.resize(65536);  // the largest UDP datagram
   }
 }
 
 VelodyneLidar::~VelodyneLidar() = default;
 
 std::optional<LidarSweep> VelodyneLidar::next() {
-  std::vector<std::uint8_t> buffer(65536);
   while (ready_pos_ >= ready_.size()) {
     if (ended_) return std::nullopt;
     ready_.clear();
@@ -145,11 +145,11 @@ std::optional<LidarSweep> VelodyneLidar::next() {
       if (got) assembler_.push(f.payload.data(), f.payload.size(), ready_);
     } else {
       const double wait = received_ ? options_.idle_timeout : options_.first_timeout;
-      const long n = udp_->receive(buffer.data(), buffer.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
+      const long n = udp_->receive(buffer_.data(), buffer_.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
       got = n >= 0;
       if (got) {
         received_ = true;
-        assembler_.push(buffer.data(), static_cast<std::size_t>(n), ready_);
+        assembler_.push(buffer_.data(), static_cast<std::size_t>(n), ready_);
       }
     }
     if (!got) {

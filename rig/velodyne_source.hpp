@@ -91,6 +91,7 @@ class VelodyneLidar {
   velodyne::SweepAssembler assembler_;
   std::unique_ptr<pcap::Reader> pcap_;
   std::unique_ptr<UdpReceiver> udp_;
+  std::vector<std::uint8_t> buffer_;  // one datagram, for a live source
   std::vector<LidarSweep> ready_;
   std::size_t ready_pos_ = 0;
   bool ended_ = false;
