@@ -3,6 +3,7 @@
 #include "app/outputs.hpp"
 #include "core/camera_model.hpp"
 
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -130,6 +131,14 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   row("after boundary estimation", hr["after"]);
   row("estimated cells, sensed only", hr["estimated_cells"]["before"]);
   row("estimated cells, after", hr["estimated_cells"]["after"]);
+  if (hr.contains("by_camera_view")) {
+    for (auto it = hr["by_camera_view"].begin(); it != hr["by_camera_view"].end(); ++it) {
+      std::string name = it.key();
+      std::replace(name.begin(), name.end(), '_', ' ');
+      row(name + ", sensed only", it.value()["before"]);
+      row(name + ", after (" + std::to_string(it.value()["raised_cells"].get<std::size_t>()) + " raised)", it.value()["after"]);
+    }
+  }
   if (hr.contains("by_distance")) {
     for (auto it = hr["by_distance"].begin(); it != hr["by_distance"].end(); ++it) {
       row(it.key() + " m, sensed only", it.value()["before"]);

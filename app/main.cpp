@@ -99,7 +99,11 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_option("--boundary-threshold", c.boundary.threshold, "boundary gradient threshold (grey levels)")->capture_default_str();
   cmd.add_option("--kx", c.boundary.kx, "weight of horizontal change in the gradient")->capture_default_str();
   cmd.add_option("--ky", c.boundary.ky, "weight of vertical change in the gradient")->capture_default_str();
+  cmd.add_flag("--erode-all-directions,!--erode-horizontal", c.boundary.erode_all_directions,
+               "erosion keeps thin boundaries of every direction, or near-horizontal ones only (default: near-horizontal)");
   cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")->capture_default_str();
+  cmd.add_flag("--clear-line,!--no-clear-line", c.estimation.clear_line,
+               "skip a frame's estimate when another sensed object stands in the vertex's image column (default: on)");
   cmd.add_option("--spread-distance", c.estimation.spread_distance,
                  "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();
@@ -136,6 +140,20 @@ void printScorecard(const nlohmann::json& r) {
                 << e["after"]["cells"].get<std::size_t>() << " cells);";
     }
     std::cout << " sensed as terrain (under crowns): " << h["object_cells_sensed_as_terrain"].get<std::size_t>() << " cells\n";
+  }
+  if (h.contains("by_camera_view")) {
+    std::cout << "    cells whose top the camera saw:";
+    for (const char* k : {"building_in_camera_view", "tree_in_camera_view"}) {
+      if (!h["by_camera_view"].contains(k)) continue;
+      const auto& e = h["by_camera_view"][k];
+      std::cout << " " << std::string(k).substr(0, std::string(k).find('_')) << " " << e["before"]["mae_m"].get<double>() << " -> "
+                << e["after"]["mae_m"].get<double>() << " m (" << e["raised_cells"].get<std::size_t>() << " of "
+                << e["after"]["cells"].get<std::size_t>() << " raised);";
+    }
+    if (h["by_camera_view"].contains("never_in_camera_view")) {
+      std::cout << " never in view: " << h["by_camera_view"]["never_in_camera_view"]["after"]["cells"].get<std::size_t>() << " cells";
+    }
+    std::cout << "\n    object edge cells raised (a wall or crown within 0.5 m): " << h.value("raised_edge_cells", 0) << "\n";
   }
   if (r["height_baselines"].contains("inpainting")) {
     const auto& b = r["height_baselines"];
@@ -230,6 +248,19 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
             << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
             << "per frame: median " << eval::percentiles(total).median << " ms in all, " << eval::percentiles(seg).median
             << " ms ground segmentation\n";
+  // memory growth between the first tenth of the run and its end, against the voxels added
+  if (!quiet && pipeline.records().size() >= 10 && pipeline.records().back().resident_bytes > 0) {
+    const auto& recs = pipeline.records();
+    const auto& a = recs[recs.size() / 10];
+    const auto& b = recs.back();
+    std::cout << "memory: " << a.resident_bytes / 1e6 << " MB resident after frame " << a.frame << ", " << b.resident_bytes / 1e6
+              << " MB after frame " << b.frame;
+    if (b.voxels > a.voxels) {
+      std::cout << "; " << (static_cast<double>(b.resident_bytes) - static_cast<double>(a.resident_bytes)) / (b.voxels - a.voxels)
+                << " bytes per voxel added in between (" << b.voxels - a.voxels << " voxels)";
+    }
+    std::cout << "\n";
+  }
   if (!quiet) {
     for (const auto& w : pipeline.warnings()) std::cerr << "terrain: warning: " << w << "\n";
   }

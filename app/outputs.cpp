@@ -130,11 +130,11 @@ void writeVoxelPcd(const fs::path& path, const Pipeline& p) {
 void writeTiming(const fs::path& dir, const Pipeline& p) {
   std::ostringstream csv;
   csv << "frame,points,new_voxels,voxels,pose_ms,voxel_ms,mesh_ms,segmentation_ms,boundary_ms,estimation_ms,total_ms,"
-         "estimated_vertices\n";
+         "estimated_vertices,resident_mb\n";
   for (const auto& r : p.records()) {
     csv << r.frame << ',' << r.points << ',' << r.new_voxels << ',' << r.voxels << ',' << r.pose_ms << ',' << r.voxel_ms
         << ',' << r.mesh_ms << ',' << r.segmentation_ms << ',' << r.boundary_ms << ',' << r.estimation_ms << ','
-        << r.total_ms << ',' << r.estimated_vertices << '\n';
+        << r.total_ms << ',' << r.estimated_vertices << ',' << r.resident_bytes / 1e6 << '\n';
   }
   io::writeFileAtomic(dir / "timing.csv", csv.str(), true);
 }

@@ -23,6 +23,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"pose.heading_baseline", num(c.pose.heading_baseline)},
       {"pose.level_min_range", num(c.pose.level_min_range)},
       {"pose.level_max_range", num(c.pose.level_max_range)},
+      {"pose.level_pitch_sigma", num(c.pose.level_pitch_sigma)},
       {"voxel_map.voxel_size", num(c.voxel_map.voxel_size)},
       {"ground.histogram",
        [&c](const YAML::Node& n) {
@@ -51,10 +52,12 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"boundary.erode_height", integer(c.boundary.erode_height)},
       {"boundary.dilate_width", integer(c.boundary.dilate_width)},
       {"boundary.dilate_height", integer(c.boundary.dilate_height)},
+      {"boundary.erode_all_directions", [&c](const YAML::Node& n) { c.boundary.erode_all_directions = n.as<bool>(); }},
       {"estimation.max_distance", num(c.estimation.max_distance)},
       {"estimation.max_height", num(c.estimation.max_height)},
       {"estimation.top_margin", integer(c.estimation.top_margin)},
       {"estimation.fusion_quantile", num(c.estimation.fusion_quantile)},
+      {"estimation.clear_line", [&c](const YAML::Node& n) { c.estimation.clear_line = n.as<bool>(); }},
       {"estimation.require_sky_above", [&c](const YAML::Node& n) { c.estimation.require_sky_above = n.as<bool>(); }},
       {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
       {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
@@ -68,6 +71,8 @@ void validate(const PipelineConfig& c) {
   require(c.voxel_map.voxel_size >= 0.02 && c.voxel_map.voxel_size <= 5, "voxel_map.voxel_size", c.voxel_map.voxel_size, "[0.02, 5] m");
   require(c.segment_every >= 1, "segment_every", c.segment_every, ">= 1");
   require(c.pose.heading_baseline > 0 && c.pose.heading_baseline <= 100, "pose.heading_baseline", c.pose.heading_baseline, "(0, 100] m");
+  require(c.pose.level_pitch_sigma > 0 && c.pose.level_pitch_sigma <= 1, "pose.level_pitch_sigma", c.pose.level_pitch_sigma,
+          "(0, 1] rad");
   require(c.ground.bin_size > 0 && c.ground.bin_size <= 5, "ground.bin_size", c.ground.bin_size, "(0, 5] m");
   require(c.ground.delta > 0 && c.ground.delta <= 10, "ground.delta", c.ground.delta, "(0, 10] m");
   require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin, "(0, 20] m");
@@ -100,7 +105,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   nlohmann::json j;
   j["segment_every"] = c.segment_every;
   j["pose"] = {{"heading_baseline", c.pose.heading_baseline}, {"level_min_range", c.pose.level_min_range},
-               {"level_max_range", c.pose.level_max_range}};
+               {"level_max_range", c.pose.level_max_range}, {"level_pitch_sigma", c.pose.level_pitch_sigma}};
   j["voxel_map"] = {{"voxel_size", c.voxel_map.voxel_size}};
   j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
                  {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
@@ -111,12 +116,12 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},
                    {"threshold", c.boundary.threshold}, {"erode_width", c.boundary.erode_width},
                    {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},
-                   {"dilate_height", c.boundary.dilate_height}};
+                   {"dilate_height", c.boundary.dilate_height}, {"erode_all_directions", c.boundary.erode_all_directions}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
                      {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile},
-                     {"require_sky_above", c.estimation.require_sky_above}, {"sky_blue_margin", c.estimation.sky_blue_margin},
-                     {"sky_min_brightness", c.estimation.sky_min_brightness},
-                     {"spread_distance", c.estimation.spread_distance},};
+                     {"clear_line", c.estimation.clear_line}, {"require_sky_above", c.estimation.require_sky_above},
+                     {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
+                     {"spread_distance", c.estimation.spread_distance}};
   return j.dump();
 }
 

@@ -32,10 +32,22 @@ BoundaryImages detectBoundaries(const cv::Mat& image, const BoundaryDetectionCon
   cv::sqrt(lx2 + ly2, out.magnitude);
   out.raw = out.magnitude > c.threshold;
   // erosion drops isolated responses, dilation restores the boundaries that survive
-  const cv::Mat erode_mask = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(c.erode_width, c.erode_height));
   const cv::Mat dilate_mask = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(c.dilate_width, c.dilate_height));
   cv::Mat eroded;
-  cv::erode(out.raw, eroded, erode_mask);
+  if (c.erode_all_directions) {
+    const int n = c.erode_width;
+    eroded = cv::Mat::zeros(out.raw.size(), CV_8UC1);
+    cv::Mat line_h = cv::Mat::ones(1, n, CV_8UC1), line_v = cv::Mat::ones(n, 1, CV_8UC1);
+    cv::Mat diag = cv::Mat::eye(n, n, CV_8UC1), anti;
+    cv::flip(diag, anti, 1);
+    cv::Mat opened;
+    for (const cv::Mat* mask : {&line_h, &line_v, &diag, &anti}) {
+      cv::morphologyEx(out.raw, opened, cv::MORPH_OPEN, *mask);
+      eroded |= opened;
+    }
+  } else {
+    cv::erode(out.raw, eroded, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(c.erode_width, c.erode_height)));
+  }
   cv::dilate(eroded, out.cleaned, dilate_mask);
   return out;
 }

@@ -16,6 +16,14 @@ struct BoundaryDetectionConfig {
   double threshold = 60.0;  // gradient magnitude, grey levels (0-255 image)
   int erode_width = 5, erode_height = 1;   // [px] erosion mask: keeps horizontal runs of 5 px or more, drops specks
   int dilate_width = 3, dilate_height = 3; // [px] dilation mask
+  // Erode along four directions (0, 45, 90 and 135 degrees) with a line of erode_width px, each
+  // followed by a dilation with the same line, and keep what survives in any: thin boundaries of
+  // every direction that run at least erode_width px (the curved top of a tree crown, a sloping
+  // roof line) stay, specks still go. Off: one erosion with the erode_width x erode_height mask,
+  // which keeps only near-horizontal boundaries. Off by default: with clear_line on, 30 frames of
+  // each terrain type (seed 1) gave a lower height error over the estimated cells on five of six
+  // types with it off, though more building cells are raised with it on.
+  bool erode_all_directions = false;
 };
 
 struct BoundaryImages {

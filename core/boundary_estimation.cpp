@@ -2,7 +2,10 @@
 
 #include "core/camera_model.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace terrain {
 
@@ -25,17 +28,140 @@ bool nonGround(const MeshVertex& m, const VoxelMap& map) {
   return map.voxels()[m.top_voxel].label == VoxelLabel::NonGround;
 }
 
+// The objects the lidar saw: 8-connected groups of non-ground vertices.
+struct Objects {
+  std::vector<std::int32_t> of;                   // per vertex: its group, -1 for ground
+  std::vector<std::vector<std::uint32_t>> members;  // per group: its vertices, the first the lowest id
+};
+
+Objects findObjects(const TerrainMesh& mesh, const VoxelMap& map) {
+  const auto& vertices = mesh.vertices();
+  Objects out;
+  out.of.assign(vertices.size(), -1);
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
+    const auto id = static_cast<std::int32_t>(out.members.size());
+    std::vector<std::uint32_t> group{i};
+    out.of[i] = id;
+    for (std::size_t q = 0; q < group.size(); ++q) {
+      const CellIndex c = vertices[group[q]].cell;
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          const std::int64_t j = mesh.find(c + CellIndex(dx, dy));
+          if (j < 0 || out.of[j] >= 0 || !nonGround(vertices[j], map)) continue;
+          out.of[j] = id;
+          group.push_back(static_cast<std::uint32_t>(j));
+        }
+      }
+    }
+    out.members.push_back(std::move(group));
+  }
+  return out;
+}
+
+// Which object stands where, on a coarse grid: what else a skyline pixel could belong to.
+class ObjectGrid {
+ public:
+  ObjectGrid(const TerrainMesh& mesh, const VoxelMap& map, const Objects& objects, double size) : size_(size) {
+    const auto& vertices = mesh.vertices();
+    if (vertices.empty()) return;
+    const double cell = map.voxelSize();
+    const auto [lo, hi] = mesh.cellBounds();
+    x0_ = lo.x() * cell, y0_ = lo.y() * cell;
+    nx_ = static_cast<int>((hi.x() - lo.x() + 1) * cell / size_) + 1;
+    ny_ = static_cast<int>((hi.y() - lo.y() + 1) * cell / size_) + 1;
+    cells_.assign(static_cast<std::size_t>(nx_) * ny_, kEmpty);
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      if (objects.of[i] < 0) continue;
+      std::int32_t& c = cells_[index((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)];
+      c = (c == kEmpty || c == objects.of[i]) ? objects.of[i] : kMixed;
+    }
+  }
+  // Could the pixel whose ray (origin o, direction dir, world frame) is followed up to `range` metres
+  // horizontally belong to an object other than `own`? It could where the ray, outside the disc
+  // (centre, radius), passes over a cell of another object whose top (tops[object], +inf: unknown)
+  // is not clearly below the ray there.
+  bool otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
+                   double radius, const std::vector<double>& tops, double margin) const {
+    if (cells_.empty()) return false;
+    const double h = dir.head<2>().norm();
+    if (h < 1e-12) return false;
+    const int steps = static_cast<int>(range / (0.5 * size_)) + 1;
+    for (int i = 0; i <= steps; ++i) {
+      const double t = range * i / steps / h;  // ray parameter: horizontal distance range * i / steps
+      const Eigen::Vector2d p = o.head<2>() + t * dir.head<2>();
+      if ((p - centre).squaredNorm() <= radius * radius) continue;
+      if (p.x() < x0_ || p.y() < y0_ || p.x() >= x0_ + nx_ * size_ || p.y() >= y0_ + ny_ * size_) continue;
+      const std::int32_t c = cells_[index(p.x(), p.y())];
+      if (c == kEmpty || c == own) continue;
+      if (c == kMixed || !(tops[c] < o.z() + t * dir.z() - margin)) return true;
+    }
+    return false;
+  }
+
+ private:
+  static constexpr std::int32_t kEmpty = -1, kMixed = -2;
+  std::size_t index(double x, double y) const {
+    const int gx = std::min(nx_ - 1, static_cast<int>((x - x0_) / size_)), gy = std::min(ny_ - 1, static_cast<int>((y - y0_) / size_));
+    return static_cast<std::size_t>(gy) * nx_ + gx;
+  }
+  double size_, x0_ = 0, y0_ = 0;
+  int nx_ = 0, ny_ = 0;
+  std::vector<std::int32_t> cells_;
+};
+
 }  // namespace
+
+Skyline skylineOf(const cv::Mat& boundary, const Pose& world_from_camera) {
+  Skyline sky;
+  sky.world_from_camera = world_from_camera;
+  if (boundary.empty() || boundary.type() != CV_8UC1) return sky;
+  sky.top.assign(boundary.cols, -1);
+  int missing = boundary.cols;
+  for (int row = 0; row < boundary.rows && missing > 0; ++row) {
+    const std::uint8_t* p = boundary.ptr<std::uint8_t>(row);
+    for (int u = 0; u < boundary.cols; ++u) {
+      if (p[u] && sky.top[u] < 0) sky.top[u] = static_cast<std::int16_t>(row), --missing;
+    }
+  }
+  return sky;
+}
 
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& k, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
+  if (boundary.empty() || boundary.type() != CV_8UC1) return {};
+  return estimateBoundaries(mesh, map, skylineOf(boundary, world_from_camera), k, cfg, rgb);
+}
+
+BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const Skyline& sky,
+                                           const CameraIntrinsics& k, const BoundaryEstimationConfig& cfg,
+                                           const cv::Mat& rgb) {
   BoundaryEstimationStats stats;
-  if (boundary.empty() || boundary.type() != CV_8UC1) return stats;
+  if (sky.top.empty()) return stats;
+  const Pose& world_from_camera = sky.world_from_camera;
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
   const double cell = map.voxelSize();
+  const int cols = static_cast<int>(sky.top.size());
+  const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
+  Objects objects;
+  std::optional<ObjectGrid> grid;
+  std::vector<double> tops;
+  if (cfg.clear_line) {
+    objects = findObjects(mesh, map);
+    grid.emplace(mesh, map, objects, 1.0);
+    // each object's known top: its highest recovered height, unknown (+inf) before any estimate
+    tops.assign(objects.members.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t g = 0; g < objects.members.size(); ++g) {
+      double top = -std::numeric_limits<double>::infinity();
+      for (const std::uint32_t j : objects.members[g]) {
+        if (!vertices[j].estimates.empty()) top = std::max(top, static_cast<double>(vertices[j].recovered_height));
+      }
+      if (std::isfinite(top)) tops[g] = top;
+    }
+  }
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     MeshVertex& m = vertices[i];
     if (!nonGround(m, map)) continue;
@@ -47,18 +173,22 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     ++stats.projected;
     // the object's top: the topmost boundary pixel in the column above the vertex
     const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
-    int top = -1;
-    for (int row = v; row >= 0; --row) {
-      if (boundary.at<std::uint8_t>(row, u)) top = row;
-    }
-    if (top < 0 || top <= cfg.top_margin) continue;
-    if (cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.size() == boundary.size() && !skyAbove(rgb, u, top, cfg)) {
+    if (u >= cols) continue;
+    const int top = sky.top[u];
+    if (top < 0 || top > v || top <= cfg.top_margin) continue;
+    if (sky_test && top < rgb.rows && !skyAbove(rgb, u, top, cfg)) {
       ++stats.no_sky;
       continue;
     }
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
+    if (grid) {
+      if (grid->otherMayOwn(centre, dir, cfg.max_distance, objects.of[i], Eigen::Vector2d(x, y), 1.0, tops, 1.0)) {
+        ++stats.not_clear;
+        continue;
+      }
+    }
     mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
     ++stats.estimated;
   }

@@ -18,6 +18,14 @@ struct BoundaryEstimationConfig {
   int top_margin = 2;            // [px] a boundary this close to the image top may be cut: skipped
   std::size_t max_estimates = 15;  // estimates kept per vertex
   double fusion_quantile = 0.5;    // the fused height is this quantile of the kept estimates (0.5: median)
+  // Skip a frame's estimate for a vertex when another object the lidar saw stands in the same image
+  // column, in front of the vertex or behind it up to max_distance, unless that object is known
+  // (from its own estimates) to be lower than the pixel's ray where the ray passes it: the topmost
+  // boundary may be that object's top (a tree before a taller building, a second row of buildings,
+  // a bump of rough ground taken for an object). On 30 frames of each terrain type (seed 1) this
+  // cut the terrain cells raised more than 1 m from 1926 to 8 (slope), 8427 to 24 (rough), 243 to 13
+  // (mixed), at the cost of fewer object cells raised.
+  bool clear_line = true;
   // Accept a top boundary only if the pixels just above it look like daylight sky (blue at least
   // sky_blue_margin grey levels above red and not below green, mean brightness >= sky_min_brightness):
   // an object that runs off the top of the image has more of itself above its topmost edge.
@@ -30,10 +38,19 @@ struct BoundaryEstimationConfig {
   double spread_distance = 0.0;  // [m]
 };
 
+// One camera frame reduced to what 3D boundary estimation needs: the camera pose and, per image
+// column, the topmost boundary pixel row (-1: no boundary in the column).
+struct Skyline {
+  Pose world_from_camera = Pose::Identity();
+  std::vector<std::int16_t> top;
+};
+Skyline skylineOf(const cv::Mat& boundary, const Pose& world_from_camera);
+
 struct BoundaryEstimationStats {
   int projected = 0;  // non-ground vertices that fell inside the image
   int estimated = 0;  // of which received a height estimate
   int no_sky = 0;     // of which were skipped: no sky above their top boundary
+  int not_clear = 0;  // of which were skipped: another object in their column (clear_line)
 };
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.
@@ -41,6 +58,11 @@ struct BoundaryEstimationStats {
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat());
+// The same from the frame's skyline (skylineOf), which holds the camera pose and each column's
+// topmost boundary pixel: the top searched above a vertex.
+BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const Skyline& skyline,
+                                           const CameraIntrinsics& intrinsics, const BoundaryEstimationConfig& config,
+                                           const cv::Mat& rgb = cv::Mat());
 
 // Spreads recovered heights over the rest of each object (config.spread_distance): a breadth-first
 // walk from every estimated non-ground vertex through 4-neighbouring non-ground vertices; each

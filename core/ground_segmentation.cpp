@@ -126,25 +126,38 @@ struct Moments {
 };
 
 // least squares in three rounds, each fitted to the points the previous plane left within
-// 1.0 m, then 0.7 m; one pass over the points per round
-Plane fitPlane(std::vector<Point3> pts) {
-  if (pts.size() < 3) return pts.empty() ? Plane{} : Plane{0, 0, pts.front().z()};
-  const Point3 ref = pts.front();
-  Moments all;
-  for (const auto& p : pts) all.add(p, ref);
-  Plane plane = all.plane(ref);
-  for (int round = 1; round < 3; ++round) {
-    const double limit = 1.0 - 0.3 * (round - 1);
-    Moments near;
-    std::size_t kept = 0;
-    for (std::size_t r = 0; r < pts.size(); ++r) {
-      if (std::abs(pts[r].z() - plane.at(pts[r].x(), pts[r].y())) < limit) near.add(pts[r], ref), pts[kept++] = pts[r];
-    }
-    if (kept < 3) break;
-    pts.resize(kept);
-    plane = near.plane(ref);
+// 1.0 m, then 0.7 m; one pass over the points per round. The points are the concatenation of
+// `parts`, read in place.
+Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
+  std::size_t n = 0;
+  const Point3* first = nullptr;
+  for (const auto* part : parts) {
+    if (!first && !part->empty()) first = &part->front();
+    n += part->size();
   }
-  return plane;
+  if (n < 3) return n == 0 ? Plane{} : Plane{0, 0, first->z()};
+  const Point3 ref = *first;
+  Moments all;
+  for (const auto* part : parts) {
+    for (const auto& p : *part) all.add(p, ref);
+  }
+  const Plane plane0 = all.plane(ref);
+  Moments near1;
+  for (const auto* part : parts) {
+    for (const auto& p : *part) {
+      if (std::abs(p.z() - plane0.at(p.x(), p.y())) < 1.0) near1.add(p, ref);
+    }
+  }
+  if (near1.n < 3) return plane0;
+  const Plane plane1 = near1.plane(ref);
+  Moments near2;
+  for (const auto* part : parts) {
+    for (const auto& p : *part) {
+      if (std::abs(p.z() - plane0.at(p.x(), p.y())) < 1.0 && std::abs(p.z() - plane1.at(p.x(), p.y())) < 0.7) near2.add(p, ref);
+    }
+  }
+  if (near2.n < 3) return plane1;
+  return near2.plane(ref);
 }
 
 // h1 as a function of position, from one histogram or from tiles
@@ -208,7 +221,7 @@ class GroundHeight {
     tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
       if (start[t] == start[t + 1]) return;
       const int tx = static_cast<int>(t % nx_), ty = static_cast<int>(t / nx_);
-      std::vector<Point3> candidates;
+      std::vector<const std::vector<Point3>*> candidates;
       std::vector<double> residual;
       std::size_t window = 0;
       for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
@@ -227,14 +240,14 @@ class GroundHeight {
             if (ux < 0 || uy < 0 || ux >= nx_ || uy >= ny_) continue;
             const std::size_t u = static_cast<std::size_t>(uy) * nx_ + ux;
             if (pass == 0) {
-              candidates.insert(candidates.end(), lowest[u].begin(), lowest[u].end());
+              candidates.push_back(&lowest[u]);
               continue;
             }
             const Plane& plane = planes_[t];
             for (std::uint32_t j = start[u]; j < start[u + 1]; ++j) residual.push_back(ph[j] - plane.at(px[j], py[j]));
           }
         }
-        if (pass == 0) planes_[t] = fitPlane(std::move(candidates));
+        if (pass == 0) planes_[t] = fitPlane(candidates);
       }
       planes_[t].c += histogramPeak(residual, cfg.bin_size);
       has_plane_[t] = 1;
@@ -512,13 +525,13 @@ struct IncrementalGroundSegmentation::State {
         if (it != tiles.end()) window.push_back(&it->second);
       }
     }
-    std::vector<Point3> candidates;
+    std::vector<const std::vector<Point3>*> candidates;
     std::size_t count = 0;
     for (const Tile* u : window) {
-      candidates.insert(candidates.end(), u->lowest.begin(), u->lowest.end());
+      candidates.push_back(&u->lowest);
       count += u->ids.size();
     }
-    Plane plane = fitPlane(std::move(candidates));
+    Plane plane = fitPlane(candidates);
     std::vector<double> residual;
     residual.reserve(count);
     for (const Tile* u : window) {

@@ -4,12 +4,27 @@
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
 
 namespace terrain {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// [m] the least travel a short run's initial heading and pitch are taken from
+constexpr double kMinTravel = 0.5;
+
+// resident memory of this process [bytes], from /proc/self/statm; 0 where that is not available
+std::size_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t pages = 0, resident = 0;
+  if (!(statm >> pages >> resident)) return 0;
+  return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
@@ -47,9 +62,16 @@ void Pipeline::process(const SensorFrame& frame) {
 
 void Pipeline::finish() {
   if (!held_.empty()) {
+    if (!poses_.ready() && poses_.settle(kMinTravel)) {
+      std::ostringstream m;
+      m << "the robot moved less than " << config_.pose.heading_baseline
+        << " m: initial heading and pitch from a shorter stretch, less accurate";
+      warn(m.str());
+    }
     if (!poses_.ready()) {
-      warn("the robot never moved " + std::to_string(config_.pose.heading_baseline) +
-           " m: heading unknown, frames processed with heading 0 (east)");
+      std::ostringstream m;
+      m << "the robot never moved " << kMinTravel << " m: heading unknown, frames processed with heading 0 (east)";
+      warn(m.str());
     }
     while (!held_.empty()) {
       processReady(held_.front().frame);
@@ -60,6 +82,10 @@ void Pipeline::finish() {
   // the final labels from one segmentation of the whole map
   if (!map_.voxels().empty()) segmentation_ = segmentGround(map_, config_.ground);
   dirty_ = false;
+  // estimates made while a vertex was provisionally non-ground do not stand once it is ground
+  for (auto& m : mesh_.vertices()) {
+    if (map_.voxels()[m.top_voxel].label == VoxelLabel::Ground) m.estimates.clear();
+  }
   spreadEstimates(mesh_, map_, config_.estimation);
   for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
   if (!map_.voxels().empty()) {
@@ -156,6 +182,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
     rec.estimation_ms = msSince(t);
   }
   rec.total_ms = msSince(start);
+  rec.resident_bytes = residentBytes();
   records_.push_back(rec);
 }
 

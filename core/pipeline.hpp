@@ -33,6 +33,7 @@ struct FrameRecord {
   double pose_ms = 0, voxel_ms = 0, mesh_ms = 0, segmentation_ms = 0, boundary_ms = 0, estimation_ms = 0, total_ms = 0;
   std::size_t points = 0, new_voxels = 0, voxels = 0;
   int estimated_vertices = 0;
+  std::size_t resident_bytes = 0;  // the process's resident memory after the frame (0: unknown)
   Point3 position = Point3::Zero();  // [m] estimated vehicle position at `time`, from the final poses (set by finish())
 };
 

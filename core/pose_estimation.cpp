@@ -80,28 +80,74 @@ void PoseEstimator::add(const SensorFrame& frame) {
   if (raw_.size() > first_new) smoothFrom(first_new);
   if (!heading_known_ && antenna_.size() >= 2 &&
       (antenna_.back().second - antenna_.front().second).head<2>().norm() >= config_.heading_baseline) {
-    initialiseAttitude();
-    heading_known_ = true;
+    heading_known_ = alignment(initial_, config_.heading_baseline);
   }
 }
 
-void PoseEstimator::initialiseAttitude() {
-  // course: the GPS displacements, against the integrated forward axis over the same steps
-  Vector3 course = Vector3::Zero(), forward = Vector3::Zero();
-  for (std::size_t i = 0; i + 1 < antenna_.size(); ++i) {
-    const Vector3 step = antenna_[i + 1].second - antenna_[i].second;
-    course += step;
-    const double mid = 0.5 * (antenna_[i].first + antenna_[i + 1].first);
-    forward += step.norm() * (rotationAt(mid) * Vector3::UnitX());
+bool PoseEstimator::settle(double min_travel) {
+  if (!heading_known_) heading_known_ = alignment(initial_, min_travel);
+  return heading_known_;
+}
+
+bool PoseEstimator::alignment(Rotation& out, double min_travel) const {
+  const std::size_t first = 0, n = raw_.size();
+  if (n < first + 3) return false;
+  // per fix: the distance travelled since the first (tau) and where the gyro alone puts the antenna
+  // relative to the first fix (m: the integrated forward axis plus the lever arm's own motion)
+  const Vector3 lever = calibration_.vehicle_from_gps.translation();
+  const Eigen::Matrix3d g_first = gyroAt(raw_[first].first).toRotationMatrix();
+  std::vector<double> tau(n - first, 0.0);
+  std::vector<Vector3> m(n - first, Vector3::Zero());
+  Vector3 travelled = Vector3::Zero();
+  for (std::size_t i = first + 1; i < n; ++i) {
+    const double step = (antenna_[i].second - antenna_[i - 1].second).norm();
+    const double mid = 0.5 * (raw_[i - 1].first + raw_[i].first);
+    travelled += step * (gyroAt(mid) * Vector3::UnitX());
+    tau[i - first] = tau[i - first - 1] + step;
+    m[i - first] = travelled + (gyroAt(raw_[i].first).toRotationMatrix() - g_first) * lever;
   }
-  const Rotation align = Rotation::FromTwoVectors(forward.normalized(), course.normalized());
+  if (tau.back() < min_travel) return false;
+  // least-squares directions: the slopes of the GPS positions and of m against tau
+  double tau_mean = 0;
+  Vector3 a_mean = Vector3::Zero(), m_mean = Vector3::Zero();
+  for (std::size_t k = 0; k < tau.size(); ++k) tau_mean += tau[k], a_mean += raw_[first + k].second, m_mean += m[k];
+  tau_mean /= tau.size(), a_mean /= tau.size(), m_mean /= tau.size();
+  Vector3 course = Vector3::Zero(), forward = Vector3::Zero();
+  for (std::size_t k = 0; k < tau.size(); ++k) {
+    course += (raw_[first + k].second - a_mean) * (tau[k] - tau_mean);
+    forward += (m[k] - m_mean) * (tau[k] - tau_mean);
+  }
+  if (course.norm() < 1e-9 || forward.norm() < 1e-9 || course.head<2>().norm() < 1e-9) return false;
+  // Pitch: the GPS course's, weighed against the pitch that makes the first sweep's ground plane
+  // level, by their variances: the course's from the scatter of the heights about their line (a
+  // short baseline leaves it to the ground plane), the ground plane's from level_pitch_sigma.
+  double stt = 0, szz = 0;
+  for (const double t : tau) stt += (t - tau_mean) * (t - tau_mean);
+  const double slope = course.z() / stt;
+  for (std::size_t k = 0; k < tau.size(); ++k) {
+    const double r = raw_[first + k].second.z() - a_mean.z() - slope * (tau[k] - tau_mean);
+    szz += r * r;
+  }
+  const double slope_var = szz / std::max<double>(1, static_cast<double>(tau.size()) - 2) / stt;
+  const Vector3 level_course(course.x(), course.y(), 0.0);
+  const Rotation level_align = Rotation::FromTwoVectors(forward.normalized(), level_course.normalized());
+  const Vector3 f0 = level_course.normalized();
+  const Vector3 up0 = level_align * (rotations_.front().world_from_vehicle * ground_up_);
+  const double pitch_level = std::atan2(up0.dot(f0), up0.z());
+  const double pitch_gps = std::atan2(course.z(), course.head<2>().norm());
+  const double prior_var = config_.level_pitch_sigma * config_.level_pitch_sigma;
+  const double w = prior_var / (prior_var + slope_var);
+  const double pitch = w * pitch_gps + (1 - w) * pitch_level;
+  course = f0 * std::cos(pitch) + Vector3::UnitZ() * std::sin(pitch);
+  const Rotation align = Rotation::FromTwoVectors(forward.normalized(), course);
   // roll about the course: bring the first sweep's ground normal as close to vertical as it goes
   const Vector3 f = course.normalized();
   const Vector3 up = align * (rotations_.front().world_from_vehicle * ground_up_);
   const Vector3 u = (up - up.dot(f) * f), z = (Vector3::UnitZ() - f.z() * f);
   double roll = 0;
   if (u.norm() > 1e-9 && z.norm() > 1e-9) roll = std::atan2(f.dot(u.cross(z)), u.dot(z));
-  initial_ = (Rotation(Eigen::AngleAxisd(roll, f)) * align).normalized();
+  out = (Rotation(Eigen::AngleAxisd(roll, f)) * align).normalized();
+  return true;
 }
 
 void PoseEstimator::smoothFrom(std::size_t first_new) {
@@ -135,17 +181,19 @@ double PoseEstimator::finalUntil() const {
   return raw_.back().first - config_.smoothing_window;
 }
 
-Rotation PoseEstimator::rotationAt(double t) const {
-  if (rotations_.empty()) return initial_;
+Rotation PoseEstimator::gyroAt(double t) const {
+  if (rotations_.empty()) return Rotation::Identity();
   auto it = std::lower_bound(rotations_.begin(), rotations_.end(), t,
                              [](const TimedRotation& r, double v) { return r.time < v; });
-  if (it == rotations_.begin()) return initial_ * it->world_from_vehicle;
-  if (it == rotations_.end()) return initial_ * rotations_.back().world_from_vehicle;
+  if (it == rotations_.begin()) return it->world_from_vehicle;
+  if (it == rotations_.end()) return rotations_.back().world_from_vehicle;
   const TimedRotation& b = *it;
   const TimedRotation& a = *(it - 1);
   const double s = (t - a.time) / (b.time - a.time);
-  return initial_ * a.world_from_vehicle.slerp(s, b.world_from_vehicle);
+  return a.world_from_vehicle.slerp(s, b.world_from_vehicle);
 }
+
+Rotation PoseEstimator::rotationAt(double t) const { return initial_ * gyroAt(t); }
 
 Vector3 PoseEstimator::antennaAt(double t) const {
   if (antenna_.empty()) return Vector3::Zero();

@@ -145,12 +145,17 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   g["morphological_filter"] = segmentationJson(map, groundByMorphologicalFilter(pts, MorphologicalFilterConfig{}), truth.voxels);
 
   // heights of object vertices, before and after recovery
-  const HeightScores h = scoreHeights(pipeline.mesh(), map.voxelSize(), world, truth.path);
+  const HeightScores h = scoreHeights(pipeline.mesh(), map, world, truth.path);
   json& hr = r["height_recovery"];
   hr["before"] = errorJson(h.before);
   hr["after"] = errorJson(h.after);
   hr["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
   hr["raised_terrain_cells"] = h.raised_terrain_cells;
+  hr["raised_edge_cells"] = h.raised_edge_cells;
+  for (const auto& [view, e] : h.by_view) {
+    hr["by_camera_view"][view] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)},
+                                  {"raised_cells", h.raised_by_view.at(view)}};
+  }
   for (const auto& [band, e] : h.by_band) hr["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   for (const auto& [id, e] : h.by_object) hr["by_object"][id] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   for (const auto& [kind, e] : h.by_kind) hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};

@@ -25,11 +25,31 @@ SegmentationScores scoreVoxels(const VoxelMap& map, const std::vector<std::uint8
   return out;
 }
 
-HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim::World& world,
+namespace {
+
+// an object's surface lies within `radius` [m] of (x, y): the cell sits on the object's edge
+bool objectNearby(const sim::World& world, double x, double y, double radius) {
+  const int n = static_cast<int>(std::ceil(radius / 0.1));
+  for (int i = -n; i <= n; ++i) {
+    for (int j = -n; j <= n; ++j) {
+      const double dx = radius * i / n, dy = radius * j / n;
+      if (dx * dx + dy * dy > radius * radius + 1e-9) continue;
+      int geom = -1;
+      const double top = world.surfaceHeight(x + dx, y + dy, &geom);
+      if (std::isfinite(top) && scenes::isObjectClass(world.geomClass(geom))) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const sim::World& world,
                           const std::vector<Point3>& robot_path) {
   HeightScores out;
+  const double voxel_size = map.voxelSize();
   std::vector<double> before, after, seen_before, seen_after;
-  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> bands, objects, kinds;
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> bands, objects, kinds, views;
   // geom -> object id
   std::map<int, std::string> owner;
   for (const auto& o : world.truth().objects) {
@@ -40,7 +60,10 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
     const CellTruth t = cellTruth(world, x, y, voxel_size);
     if (!std::isfinite(t.top)) continue;
     if (!t.object) {
-      out.raised_terrain_cells += v.raised() && v.height() > t.top + 1.0;
+      if (v.raised() && v.height() > t.top + 1.0) {
+        if (objectNearby(world, x, y, 0.5)) ++out.raised_edge_cells;
+        else ++out.raised_terrain_cells;
+      }
       continue;
     }
     double d = std::numeric_limits<double>::infinity();
@@ -51,8 +74,16 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
     if (!v.estimates.empty()) seen_before.push_back(eb), seen_after.push_back(ea);
     const char* band = d < 30 ? "0-30" : d < 60 ? "30-60" : d < 100 ? "60-100" : nullptr;
     if (band) bands[band].first.push_back(eb), bands[band].second.push_back(ea);
-    auto& kind = kinds[world.geomClass(t.geom) == scenes::GeomClass::Building ? "building" : "tree"];
+    const std::string kind_name = world.geomClass(t.geom) == scenes::GeomClass::Building ? "building" : "tree";
+    auto& kind = kinds[kind_name];
     kind.first.push_back(eb), kind.second.push_back(ea);
+    // the camera saw the cell's top (its top voxel took a colour from an image)
+    const bool in_view = map.voxels()[v.top_voxel].coloured;
+    for (const std::string& key : {std::string(in_view ? "in_camera_view" : "never_in_camera_view"),
+                                   in_view ? kind_name + "_in_camera_view" : kind_name + "_never_in_camera_view"}) {
+      views[key].first.push_back(eb), views[key].second.push_back(ea);
+      out.raised_by_view[key] += v.raised();
+    }
     out.sensed_as_terrain += v.sensed_height < t.terrain + 0.5;
     if (auto it = owner.find(t.geom); it != owner.end()) {
       objects[it->second].first.push_back(eb);
@@ -66,6 +97,7 @@ HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim:
   for (const auto& [k, v] : bands) out.by_band[k] = {errorStats(v.first), errorStats(v.second)};
   for (const auto& [k, v] : objects) out.by_object[k] = {errorStats(v.first), errorStats(v.second)};
   for (const auto& [k, v] : kinds) out.by_kind[k] = {errorStats(v.first), errorStats(v.second)};
+  for (const auto& [k, v] : views) out.by_view[k] = {errorStats(v.first), errorStats(v.second)};
   return out;
 }
 

@@ -29,12 +29,20 @@ struct HeightScores {
   // their vertex is ground, so boundary estimation, which raises non-ground vertices, cannot reach them
   std::size_t sensed_as_terrain = 0;
   ErrorStats seen_before, seen_after;  // object cells that received at least one estimate
-  std::size_t raised_terrain_cells = 0;  // cells raised although terrain is their true top
+  // object cells by whether the camera ever saw their top: "in_camera_view", "never_in_camera_view",
+  // and per kind ("building_in_camera_view", ...); the method can only raise cells it saw
+  std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_view;
+  std::map<std::string, std::size_t> raised_by_view;  // of those cells, how many were raised
+  // cells raised more than 1 m above their true top although terrain is their true top: away from
+  // any object (no object surface within 0.5 m), and on an object's edge (a wall or crown within
+  // 0.5 m: the cell took the object's points through a small pose or beam error)
+  std::size_t raised_terrain_cells = 0;
+  std::size_t raised_edge_cells = 0;
 };
 
 // Height errors of the mesh vertices over cells where an object is the true top. robot_path: the
 // true robot positions, for the distance bands (distance of a cell to the nearest of them).
-HeightScores scoreHeights(const TerrainMesh& mesh, double voxel_size, const sim::World& world,
+HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const sim::World& world,
                           const std::vector<Point3>& robot_path);
 
 }  // namespace terrain::eval

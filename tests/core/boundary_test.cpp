@@ -8,6 +8,16 @@
 namespace terrain {
 namespace {
 
+// a level camera 1.6 m above the origin looking north (+y)
+Pose northCamera() {
+  Pose world_from_camera = Pose::Identity();
+  world_from_camera.linear().col(0) = Vector3(1, 0, 0);   // x right = east
+  world_from_camera.linear().col(1) = Vector3(0, 0, -1);  // y down
+  world_from_camera.linear().col(2) = Vector3(0, 1, 0);   // z forward = north
+  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  return world_from_camera;
+}
+
 TEST(BoundaryDetectionTest, BoxAgainstTheSkyGivesItsTopOnTheKnownRows) {
   // sky above row 100, a dark box from row 100 down in columns 60-180, and ground below row 200
   cv::Mat img(240, 320, CV_8UC3, cv::Scalar(200, 220, 255));
@@ -33,6 +43,38 @@ TEST(BoundaryDetectionTest, BoxAgainstTheSkyGivesItsTopOnTheKnownRows) {
   EXPECT_THROW(detectBoundaries(cv::Mat(), BoundaryDetectionConfig{}), std::invalid_argument);
 }
 
+TEST(BoundaryDetectionTest, ErosionInAllDirectionsKeepsASlopingEdge) {
+  // a dark roof sloping at 45 degrees against the sky (its edge from (40, 160) up to (160, 40)),
+  // and two single-pixel specks in the sky
+  cv::Mat img(240, 320, CV_8UC1, cv::Scalar(220));
+  const std::vector<cv::Point> roof{{40, 160}, {160, 40}, {280, 160}, {280, 239}, {40, 239}};
+  cv::fillPoly(img, std::vector<std::vector<cv::Point>>{roof}, cv::Scalar(60));
+  img.at<std::uint8_t>(20, 40) = 0;
+  img.at<std::uint8_t>(30, 290) = 0;
+  BoundaryDetectionConfig c;
+  // boundary pixels within 2 px of the sloping edge's middle half, (70, 130) to (130, 70)
+  auto on_edge = [](const cv::Mat& b) {
+    int n = 0;
+    for (int x = 70; x <= 130; ++x) {
+      const int y = 200 - x;
+      n += cv::countNonZero(b(cv::Rect(x, y - 2, 1, 5))) > 0;
+    }
+    return n;
+  };
+  for (const bool all : {true, false}) {
+    c.erode_all_directions = all;
+    const BoundaryImages b = detectBoundaries(img, c);
+    EXPECT_EQ(on_edge(b.raw), 61);
+    // kept in every column of it when eroding along all directions; a horizontal-only erosion
+    // leaves nothing of a 45-degree edge one pixel wide per row
+    if (all) EXPECT_EQ(on_edge(b.cleaned), 61);
+    else EXPECT_LT(on_edge(b.cleaned), 10);
+    // the specks go either way
+    EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(30, 10, 20, 20))), 0) << all;
+    EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(280, 20, 20, 20))), 0) << all;
+  }
+}
+
 TEST(BoundaryDetectionTest, VerticalChangesWeighMoreThanHorizontal) {
   cv::Mat horizontal_edge(50, 50, CV_8UC1, cv::Scalar(0)), vertical_edge(50, 50, CV_8UC1, cv::Scalar(0));
   horizontal_edge(cv::Rect(0, 25, 50, 25)).setTo(100);
@@ -49,11 +91,7 @@ TEST(BoundaryDetectionTest, VerticalChangesWeighMoreThanHorizontal) {
 TEST(BoundaryEstimationTest, InverseProjectionOfAKnownTopPixelGivesTheExactHeight) {
   // camera 1.6 m up looking north (+y), level; a wall top 12 m high at y = 20
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
-  Pose world_from_camera = Pose::Identity();
-  world_from_camera.linear().col(0) = Vector3(1, 0, 0);   // x right = east
-  world_from_camera.linear().col(1) = Vector3(0, 0, -1);  // y down
-  world_from_camera.linear().col(2) = Vector3(0, 1, 0);   // z forward = north
-  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  const Pose world_from_camera = northCamera();
   const Point3 top(3.0, 20.0, 12.0);
   const auto px = project(k, world_from_camera.inverse() * top);
   ASSERT_TRUE(px.has_value());
@@ -85,11 +123,7 @@ namespace {
 // the object above (cut off by the image top) does not
 TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
-  Pose world_from_camera = Pose::Identity();
-  world_from_camera.linear().col(0) = Vector3(1, 0, 0);
-  world_from_camera.linear().col(1) = Vector3(0, 0, -1);
-  world_from_camera.linear().col(2) = Vector3(0, 1, 0);
-  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  const Pose world_from_camera = northCamera();
   VoxelMap map(VoxelMapConfig{0.2});
   map.insert({Point3(3.05, 20.05, 1.05)}, 0);
   map.voxels()[0].label = VoxelLabel::NonGround;
@@ -106,6 +140,50 @@ TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
     const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, rgb);
     EXPECT_EQ(stats.estimated, sky ? 1 : 0);
     EXPECT_EQ(stats.no_sky, sky ? 0 : 1);
+  }
+}
+
+TEST(BoundaryEstimationTest, SkylineIsTheTopmostBoundaryOfEachColumn) {
+  cv::Mat boundary(100, 4, CV_8UC1, cv::Scalar(0));
+  boundary.at<std::uint8_t>(50, 0) = 255;
+  boundary.at<std::uint8_t>(30, 0) = 255;
+  boundary.at<std::uint8_t>(99, 2) = 255;
+  boundary.at<std::uint8_t>(0, 3) = 255;
+  const Skyline s = skylineOf(boundary, Pose::Identity());
+  EXPECT_EQ(s.top, (std::vector<std::int16_t>{30, -1, 99, 0}));
+  EXPECT_TRUE(skylineOf(cv::Mat(), Pose::Identity()).top.empty());
+}
+
+// A wall top 12 m high at (3, 20) seen from the origin looking north, and a second object B on the
+// same line of sight, twice as far: the top boundary could be B's unless B is known to be lower
+// than the ray where the ray passes over it.
+TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  const Pose world_from_camera = northCamera();
+  const auto top_px = project(k, world_from_camera.inverse() * Vector3(3.1, 20.1, 12.0));
+  ASSERT_TRUE(top_px.has_value());
+  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
+  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  // where the top pixel's ray passes B (40 m away) it is 1.6 + 2 * 10.4 = 22.4 m up
+  struct Case {
+    bool clear_line;
+    float b_top;  // B's recovered top; 0: B has no estimate (unknown top)
+    int estimated;
+  };
+  for (const Case c : {Case{true, 0, 0}, Case{false, 0, 1}, Case{true, 15, 1}, Case{true, 30, 0}}) {
+    VoxelMap map(VoxelMapConfig{0.2});
+    map.insert({Point3(3.05, 20.05, 1.05), Point3(6.25, 40.25, 1.05)}, 0);
+    for (auto& v : map.voxels()) v.label = VoxelLabel::NonGround;
+    TerrainMesh mesh;
+    mesh.update(map, map.takeNewVoxels());
+    ASSERT_EQ(mesh.vertices().size(), 2u);
+    const std::uint32_t a = mesh.vertices()[0].cell.y() < 150 ? 0 : 1, b = 1 - a;
+    if (c.b_top > 0) mesh.addEstimate(b, c.b_top, 15);
+    BoundaryEstimationConfig cfg;
+    cfg.clear_line = c.clear_line;
+    estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg);
+    EXPECT_EQ(static_cast<int>(mesh.vertices()[a].estimates.size()), c.estimated)
+        << "clear_line " << c.clear_line << ", B's top " << c.b_top;
   }
 }
 

@@ -73,10 +73,19 @@ TEST(PipelineTest, FullRunBringsObjectHeightsCloserToTheTruth) {
   }
   pipeline.finish();
   ASSERT_EQ(pipeline.records().size(), 30u);
-  const auto h = eval::scoreHeights(pipeline.mesh(), pipeline.map().voxelSize(), *world, path);
+  const auto h = eval::scoreHeights(pipeline.mesh(), pipeline.map(), *world, path);
   ASSERT_GT(h.seen_after.count, 50u);
   EXPECT_LT(h.seen_after.mae, 0.5 * h.seen_before.mae) << h.seen_before.mae << " -> " << h.seen_after.mae;
   EXPECT_LT(h.after.mae, h.before.mae);
+  // object cells the camera saw are where the recovery happens: all raised cells are among them or
+  // next to them, and their error falls
+  const auto& seen = h.by_view.at("in_camera_view");
+  ASSERT_GT(seen.first.count, 50u);
+  EXPECT_LT(seen.second.mae, seen.first.mae);
+  EXPECT_GT(h.raised_by_view.at("in_camera_view"), h.raised_by_view.count("never_in_camera_view")
+                                                       ? h.raised_by_view.at("never_in_camera_view") : 0u);
+  EXPECT_EQ(seen.first.count + (h.by_view.count("never_in_camera_view") ? h.by_view.at("never_in_camera_view").first.count : 0u),
+            h.before.count);
   // the segmentation found ground and objects
   std::size_t ground = 0;
   for (auto g : pipeline.segmentation().refined) ground += g;
