@@ -149,13 +149,22 @@ void Pipeline::processReady(const SensorFrame& frame) {
   t = Clock::now();
   rec.new_voxels = map_.insert(world, static_cast<std::uint32_t>(frame.index), has_image ? &colours : nullptr);
   rec.voxels = map_.size();
-  incremental_.touch(world, map_.voxelSize());
-  dirty_ = dirty_ || !world.empty();
+  const std::vector<std::uint32_t> new_ids = map_.takeNewVoxels();
+  // the tiles that gained voxels are re-segmented; existing voxels only refine their mean height,
+  // which the whole-map segmentation at finish() takes in
+  std::vector<Point3> new_voxels;
+  new_voxels.reserve(new_ids.size());
+  for (const std::uint32_t n : new_ids) {
+    const Voxel& v = map_.voxels()[n];
+    new_voxels.emplace_back((v.index.x() + 0.5) * map_.voxelSize(), (v.index.y() + 0.5) * map_.voxelSize(), v.height);
+  }
+  incremental_.touch(new_voxels, map_.voxelSize());
+  dirty_ = dirty_ || !new_ids.empty();
   rec.voxel_ms = msSince(t);
 
   // terrain mesh
   t = Clock::now();
-  mesh_.update(map_, map_.takeNewVoxels());
+  mesh_.update(map_, new_ids);
   rec.mesh_ms = msSince(t);
 
   // ground segmentation
