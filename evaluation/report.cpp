@@ -53,7 +53,8 @@ void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibra
   if (!frame.truth) return;
   truth.voxels.add(frame, calibration.vehicle_from_lidar);
   for (const auto& p : frame.truth->poses) truth.path.push_back(p.world_from_vehicle.translation());
-  if (camera_every > 0 && frame.sensors.index % camera_every == 0 && frame.sensors.image &&
+  if (truth.camera_stride == 0) truth.camera_stride = camera_every;
+  if (truth.camera_stride > 0 && frame.sensors.index % truth.camera_stride == 0 && frame.sensors.image &&
       !frame.truth->segmentation.empty()) {
     CameraTruthFrame c;
     c.frame = frame.sensors.index;
@@ -61,6 +62,15 @@ void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibra
     c.segmentation = frame.truth->segmentation;
     c.world_from_camera = interpolatePose(frame.truth->poses, frame.sensors.image->time) * calibration.vehicle_from_camera;
     truth.cameras.push_back(std::move(c));
+    if (truth.cameras.size() > kMaxCameraFrames) {
+      // keep the frames on the doubled stride
+      truth.camera_stride *= 2;
+      std::vector<CameraTruthFrame> kept;
+      for (auto& k : truth.cameras) {
+        if (k.frame % truth.camera_stride == 0) kept.push_back(std::move(k));
+      }
+      truth.cameras = std::move(kept);
+    }
   }
 }
 

@@ -28,9 +28,13 @@ struct RunTruth {
   VoxelTruth voxels;
   std::vector<Point3> path;  // true vehicle positions
   std::vector<CameraTruthFrame> cameras;
+  int camera_stride = 0;  // frames between kept camera frames (0: camera_every)
 };
 
-// Adds one frame's truth (every `camera_every`-th frame keeps its camera truth).
+// Adds one frame's truth. Every `camera_every`-th frame keeps its camera truth (RGB and true
+// segmentation, ~1.5 MB at 640x480); past kMaxCameraFrames kept frames every second one is dropped
+// and the stride doubles, so a long run's memory does not grow with its length.
+constexpr std::size_t kMaxCameraFrames = 64;
 void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibration& calibration, int camera_every);
 
 struct BoundaryCoverage {

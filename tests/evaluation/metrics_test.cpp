@@ -1,4 +1,5 @@
 #include "evaluation/metrics.hpp"
+#include "evaluation/report.hpp"
 
 #include <gtest/gtest.h>
 
@@ -37,6 +38,32 @@ TEST(MetricsTest, Percentiles) {
   const Percentiles p = percentiles(v);
   EXPECT_DOUBLE_EQ(p.median, 50);
   EXPECT_DOUBLE_EQ(p.p95, 95);
+}
+
+}  // namespace
+}  // namespace terrain::eval
+
+namespace terrain::eval {
+namespace {
+
+TEST(RunTruthTest, CameraFramesThinOutOverALongRun) {
+  // 1000 frames with an image each: every tenth kept until 64 are held, then every twentieth, ...
+  RunTruth truth(0.2);
+  for (int i = 0; i < 1000; ++i) {
+    rig::RigFrame f;
+    f.sensors.index = i;
+    f.sensors.image = CameraImage{0.1 * i, cv::Mat(4, 4, CV_8UC3, cv::Scalar(1, 2, 3))};
+    f.truth = rig::FrameTruth{};
+    f.truth->segmentation = cv::Mat(4, 4, CV_16UC1, cv::Scalar(1));
+    f.truth->poses.push_back({0.1 * i, Pose::Identity()});
+    addFrameTruth(truth, f, RigCalibration{}, 10);
+    ASSERT_LE(truth.cameras.size(), kMaxCameraFrames) << "frame " << i;
+  }
+  // strides 10 -> 20 (at frame 640) -> 40 (at frame 1280: not reached)
+  EXPECT_EQ(truth.camera_stride, 20);
+  ASSERT_EQ(truth.cameras.size(), 50u);  // 0, 20, ..., 980
+  for (std::size_t k = 0; k < truth.cameras.size(); ++k) EXPECT_EQ(truth.cameras[k].frame, static_cast<int>(20 * k));
+  EXPECT_EQ(truth.path.size(), 1000u);
 }
 
 }  // namespace
