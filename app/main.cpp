@@ -255,7 +255,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
     const auto& b = recs.back();
     std::cout << "memory: " << a.resident_bytes / 1e6 << " MB resident after frame " << a.frame << ", " << b.resident_bytes / 1e6
               << " MB after frame " << b.frame;
-    if (b.voxels > a.voxels) {
+    if (b.voxels > a.voxels && b.resident_bytes > a.resident_bytes) {
       std::cout << "; " << (static_cast<double>(b.resident_bytes) - static_cast<double>(a.resident_bytes)) / (b.voxels - a.voxels)
                 << " bytes per voxel added in between (" << b.voxels - a.voxels << " voxels)";
     }

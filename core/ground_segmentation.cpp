@@ -160,6 +160,25 @@ Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
   return near2.plane(ref);
 }
 
+// The plane-fit candidates of a tile of k x k columns whose lowest voxel heights are `low` (row
+// major, +inf for an empty column; the tile's first column is (cx, cy)): the lowest column of every
+// 2 x 2 block, at that column's centre. A quarter of the columns fix a plane as well as all of them.
+void blockMinima(const std::vector<float>& low, int k, int cx, int cy, double cell, std::vector<Point3>& out) {
+  for (int r = 0; r < k; r += 2) {
+    for (int c = 0; c < k; c += 2) {
+      float best = std::numeric_limits<float>::infinity();
+      int br = 0, bc = 0;
+      for (int dr = 0; dr < 2 && r + dr < k; ++dr) {
+        for (int dc = 0; dc < 2 && c + dc < k; ++dc) {
+          const float l = low[static_cast<std::size_t>(r + dr) * k + c + dc];
+          if (l < best) best = l, br = r + dr, bc = c + dc;
+        }
+      }
+      if (std::isfinite(best)) out.emplace_back((cx + bc + 0.5) * cell, (cy + br + 0.5) * cell, best);
+    }
+  }
+}
+
 // h1 as a function of position, from one histogram or from tiles
 class GroundHeight {
  public:
@@ -208,12 +227,7 @@ class GroundHeight {
         float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k_ + (v.index.x() - cx)];
         l = std::min(l, v.height);
       }
-      for (int r = 0; r < k_; ++r) {
-        for (int c = 0; c < k_; ++c) {
-          const float l = low[static_cast<std::size_t>(r) * k_ + c];
-          if (std::isfinite(l)) lowest[t].emplace_back((cx + c + 0.5) * cell_, (cy + r + 0.5) * cell_, l);
-        }
-      }
+      blockMinima(low, k_, cx, cy, cell_, lowest[t]);
     });
     // per tile: a plane through the window's column minima, then the histogram of heights above it
     planes_.assign(tiles, Plane{});
@@ -507,12 +521,7 @@ struct IncrementalGroundSegmentation::State {
       l = std::min(l, v.height);
     }
     t.lowest.clear();
-    for (int r = 0; r < k; ++r) {
-      for (int c = 0; c < k; ++c) {
-        const float l = low[static_cast<std::size_t>(r) * k + c];
-        if (std::isfinite(l)) t.lowest.emplace_back((cx + c + 0.5) * cell, (cy + r + 0.5) * cell, l);
-      }
-    }
+    blockMinima(low, k, cx, cy, cell, t.lowest);
   }
 
   // the plane of one tile, as GroundHeight fits it: through the lowest voxel of every column of
