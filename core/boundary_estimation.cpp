@@ -30,18 +30,19 @@ bool nonGround(const MeshVertex& m, const VoxelMap& map) {
 
 // The objects the lidar saw: 8-connected groups of non-ground vertices.
 struct Objects {
-  std::vector<std::int32_t> of;                   // per vertex: its group, -1 for ground
-  std::vector<std::vector<std::uint32_t>> members;  // per group: its vertices, the first the lowest id
+  std::vector<std::int32_t> of;  // per vertex: its group, -1 for ground
+  std::int32_t count = 0;        // groups
 };
 
 Objects findObjects(const TerrainMesh& mesh, const VoxelMap& map) {
   const auto& vertices = mesh.vertices();
   Objects out;
   out.of.assign(vertices.size(), -1);
+  std::vector<std::uint32_t> group;
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
-    const auto id = static_cast<std::int32_t>(out.members.size());
-    std::vector<std::uint32_t> group{i};
+    const std::int32_t id = out.count++;
+    group.assign(1, i);
     out.of[i] = id;
     for (std::size_t q = 0; q < group.size(); ++q) {
       const CellIndex c = vertices[group[q]].cell;
@@ -54,7 +55,6 @@ Objects findObjects(const TerrainMesh& mesh, const VoxelMap& map) {
         }
       }
     }
-    out.members.push_back(std::move(group));
   }
   return out;
 }
@@ -127,16 +127,12 @@ Skyline skylineOf(const cv::Mat& boundary, const Pose& world_from_camera) {
   return sky;
 }
 
-BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
-                                           const CameraIntrinsics& k, const Pose& world_from_camera,
-                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
-  if (boundary.empty() || boundary.type() != CV_8UC1) return {};
-  return estimateBoundaries(mesh, map, skylineOf(boundary, world_from_camera), k, cfg, rgb);
-}
+namespace {
 
-BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const Skyline& sky,
-                                           const CameraIntrinsics& k, const BoundaryEstimationConfig& cfg,
-                                           const cv::Mat& rgb) {
+// the top searched above each vertex is its column's topmost boundary pixel, from the skyline
+BoundaryEstimationStats estimateFromSkyline(TerrainMesh& mesh, const VoxelMap& map, const Skyline& sky,
+                                            const CameraIntrinsics& k, const BoundaryEstimationConfig& cfg,
+                                            const cv::Mat& rgb) {
   BoundaryEstimationStats stats;
   if (sky.top.empty()) return stats;
   const Pose& world_from_camera = sky.world_from_camera;
@@ -153,13 +149,14 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     objects = findObjects(mesh, map);
     grid.emplace(mesh, map, objects, 1.0);
     // each object's known top: its highest recovered height, unknown (+inf) before any estimate
-    tops.assign(objects.members.size(), std::numeric_limits<double>::infinity());
-    for (std::size_t g = 0; g < objects.members.size(); ++g) {
-      double top = -std::numeric_limits<double>::infinity();
-      for (const std::uint32_t j : objects.members[g]) {
-        if (!vertices[j].estimates.empty()) top = std::max(top, static_cast<double>(vertices[j].recovered_height));
+    tops.assign(objects.count, -std::numeric_limits<double>::infinity());
+    for (std::size_t j = 0; j < vertices.size(); ++j) {
+      if (objects.of[j] >= 0 && !vertices[j].estimates.empty()) {
+        tops[objects.of[j]] = std::max(tops[objects.of[j]], static_cast<double>(vertices[j].recovered_height));
       }
-      if (std::isfinite(top)) tops[g] = top;
+    }
+    for (double& top : tops) {
+      if (!std::isfinite(top)) top = std::numeric_limits<double>::infinity();
     }
   }
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
@@ -193,6 +190,15 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     ++stats.estimated;
   }
   return stats;
+}
+
+}  // namespace
+
+BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
+                                           const CameraIntrinsics& k, const Pose& world_from_camera,
+                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
+  if (boundary.empty() || boundary.type() != CV_8UC1) return {};
+  return estimateFromSkyline(mesh, map, skylineOf(boundary, world_from_camera), k, cfg, rgb);
 }
 
 int spreadEstimates(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& cfg) {

@@ -58,11 +58,6 @@ struct BoundaryEstimationStats {
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat());
-// The same from the frame's skyline (skylineOf), which holds the camera pose and each column's
-// topmost boundary pixel: the top searched above a vertex.
-BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const Skyline& skyline,
-                                           const CameraIntrinsics& intrinsics, const BoundaryEstimationConfig& config,
-                                           const cv::Mat& rgb = cv::Mat());
 
 // Spreads recovered heights over the rest of each object (config.spread_distance): a breadth-first
 // walk from every estimated non-ground vertex through 4-neighbouring non-ground vertices; each

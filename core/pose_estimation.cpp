@@ -90,59 +90,58 @@ bool PoseEstimator::settle(double min_travel) {
 }
 
 bool PoseEstimator::alignment(Rotation& out, double min_travel) const {
-  const std::size_t first = 0, n = raw_.size();
-  if (n < first + 3) return false;
+  const std::size_t n = raw_.size();
+  if (n < 3) return false;
   // per fix: the distance travelled since the first (tau) and where the gyro alone puts the antenna
   // relative to the first fix (m: the integrated forward axis plus the lever arm's own motion)
   const Vector3 lever = calibration_.vehicle_from_gps.translation();
-  const Eigen::Matrix3d g_first = gyroAt(raw_[first].first).toRotationMatrix();
-  std::vector<double> tau(n - first, 0.0);
-  std::vector<Vector3> m(n - first, Vector3::Zero());
+  const Eigen::Matrix3d g_first = gyroAt(raw_.front().first).toRotationMatrix();
+  std::vector<double> tau(n, 0.0);
+  std::vector<Vector3> m(n, Vector3::Zero());
   Vector3 travelled = Vector3::Zero();
-  for (std::size_t i = first + 1; i < n; ++i) {
+  for (std::size_t i = 1; i < n; ++i) {
     const double step = (antenna_[i].second - antenna_[i - 1].second).norm();
     const double mid = 0.5 * (raw_[i - 1].first + raw_[i].first);
     travelled += step * (gyroAt(mid) * Vector3::UnitX());
-    tau[i - first] = tau[i - first - 1] + step;
-    m[i - first] = travelled + (gyroAt(raw_[i].first).toRotationMatrix() - g_first) * lever;
+    tau[i] = tau[i - 1] + step;
+    m[i] = travelled + (gyroAt(raw_[i].first).toRotationMatrix() - g_first) * lever;
   }
   if (tau.back() < min_travel) return false;
   // least-squares directions: the slopes of the GPS positions and of m against tau
   double tau_mean = 0;
   Vector3 a_mean = Vector3::Zero(), m_mean = Vector3::Zero();
-  for (std::size_t k = 0; k < tau.size(); ++k) tau_mean += tau[k], a_mean += raw_[first + k].second, m_mean += m[k];
-  tau_mean /= tau.size(), a_mean /= tau.size(), m_mean /= tau.size();
+  for (std::size_t k = 0; k < n; ++k) tau_mean += tau[k], a_mean += raw_[k].second, m_mean += m[k];
+  tau_mean /= n, a_mean /= n, m_mean /= n;
   Vector3 course = Vector3::Zero(), forward = Vector3::Zero();
-  for (std::size_t k = 0; k < tau.size(); ++k) {
-    course += (raw_[first + k].second - a_mean) * (tau[k] - tau_mean);
+  double stt = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    course += (raw_[k].second - a_mean) * (tau[k] - tau_mean);
     forward += (m[k] - m_mean) * (tau[k] - tau_mean);
+    stt += (tau[k] - tau_mean) * (tau[k] - tau_mean);
   }
-  if (course.norm() < 1e-9 || forward.norm() < 1e-9 || course.head<2>().norm() < 1e-9) return false;
+  if (forward.norm() < 1e-9 || course.head<2>().norm() < 1e-9) return false;
   // Pitch: the GPS course's, weighed against the pitch that makes the first sweep's ground plane
   // level, by their variances: the course's from the scatter of the heights about their line (a
   // short baseline leaves it to the ground plane), the ground plane's from level_pitch_sigma.
-  double stt = 0, szz = 0;
-  for (const double t : tau) stt += (t - tau_mean) * (t - tau_mean);
   const double slope = course.z() / stt;
-  for (std::size_t k = 0; k < tau.size(); ++k) {
-    const double r = raw_[first + k].second.z() - a_mean.z() - slope * (tau[k] - tau_mean);
+  double szz = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double r = raw_[k].second.z() - a_mean.z() - slope * (tau[k] - tau_mean);
     szz += r * r;
   }
-  const double slope_var = szz / std::max<double>(1, static_cast<double>(tau.size()) - 2) / stt;
-  const Vector3 level_course(course.x(), course.y(), 0.0);
-  const Rotation level_align = Rotation::FromTwoVectors(forward.normalized(), level_course.normalized());
-  const Vector3 f0 = level_course.normalized();
-  const Vector3 up0 = level_align * (rotations_.front().world_from_vehicle * ground_up_);
+  const double slope_var = szz / std::max(1.0, static_cast<double>(n) - 2) / stt;
+  const Vector3 ground_up = rotations_.front().world_from_vehicle * ground_up_;  // first sweep, gyro frame
+  const Vector3 f0 = Vector3(course.x(), course.y(), 0.0).normalized();
+  const Vector3 up0 = Rotation::FromTwoVectors(forward.normalized(), f0) * ground_up;
   const double pitch_level = std::atan2(up0.dot(f0), up0.z());
   const double pitch_gps = std::atan2(course.z(), course.head<2>().norm());
   const double prior_var = config_.level_pitch_sigma * config_.level_pitch_sigma;
   const double w = prior_var / (prior_var + slope_var);
   const double pitch = w * pitch_gps + (1 - w) * pitch_level;
-  course = f0 * std::cos(pitch) + Vector3::UnitZ() * std::sin(pitch);
-  const Rotation align = Rotation::FromTwoVectors(forward.normalized(), course);
+  const Vector3 f = f0 * std::cos(pitch) + Vector3::UnitZ() * std::sin(pitch);
+  const Rotation align = Rotation::FromTwoVectors(forward.normalized(), f);
   // roll about the course: bring the first sweep's ground normal as close to vertical as it goes
-  const Vector3 f = course.normalized();
-  const Vector3 up = align * (rotations_.front().world_from_vehicle * ground_up_);
+  const Vector3 up = align * ground_up;
   const Vector3 u = (up - up.dot(f) * f), z = (Vector3::UnitZ() - f.z() * f);
   double roll = 0;
   if (u.norm() > 1e-9 && z.norm() > 1e-9) roll = std::atan2(f.dot(u.cross(z)), u.dot(z));
