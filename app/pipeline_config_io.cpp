@@ -43,6 +43,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"ground.gamma", num(c.ground.gamma)},
       {"ground.icm_iterations", integer(c.ground.icm_iterations)},
       {"ground.threads", integer(c.ground.threads)},
+      {"ground.defer_share", num(c.ground.defer_share)},
       {"boundary.a", num(c.boundary.a)},
       {"boundary.b", num(c.boundary.b)},
       {"boundary.kx", num(c.boundary.kx)},
@@ -81,6 +82,7 @@ void validate(const PipelineConfig& c) {
   require(c.ground.alpha > 0, "ground.alpha", c.ground.alpha, "> 0");
   require(c.ground.beta > 0, "ground.beta", c.ground.beta, "> 0");
   require(c.ground.gamma > 0, "ground.gamma", c.ground.gamma, "> 0");
+  require(c.ground.defer_share >= 0 && c.ground.defer_share <= 1, "ground.defer_share", c.ground.defer_share, "[0, 1]");
   require(c.ground.icm_iterations >= 1 && c.ground.icm_iterations <= 1000, "ground.icm_iterations", c.ground.icm_iterations, "[1, 1000]");
   require(c.boundary.a != 0, "boundary.a", c.boundary.a, "non-zero");
   require(c.boundary.b != 0, "boundary.b", c.boundary.b, "non-zero");
@@ -112,7 +114,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                  {"bin_size", c.ground.bin_size}, {"delta", c.ground.delta}, {"range_margin", c.ground.range_margin},
                  {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius}, {"alpha", c.ground.alpha},
                  {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations},
-                 {"threads", c.ground.threads}};
+                 {"threads", c.ground.threads}, {"defer_share", c.ground.defer_share}};
   j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},
                    {"threshold", c.boundary.threshold}, {"erode_width", c.boundary.erode_width},
                    {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},

@@ -494,6 +494,7 @@ struct IncrementalGroundSegmentation::State {
   struct Tile {
     int tx = 0, ty = 0;
     std::vector<std::uint32_t> ids;  // in id order
+    std::size_t pending = 0;         // voxels added since it was last re-segmented
     std::vector<Point3> lowest;      // the lowest voxel of every column, rows then columns
     Plane plane;
   };
@@ -598,7 +599,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
     State::Tile& t = st.tiles[key];
     if (t.ids.empty()) t.tx = tx, t.ty = ty;
     t.ids.push_back(static_cast<std::uint32_t>(id));
-    st.touched.insert(key);
+    if (static_cast<double>(++t.pending) >= cfg.defer_share * static_cast<double>(t.ids.size())) st.touched.insert(key);
   }
   st.taken = n;
   SegmentationResult& out = st.result;
@@ -626,7 +627,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   std::vector<State::Tile*> touched;
   for (std::uint64_t key : st.touched) {
     auto it = st.tiles.find(key);
-    if (it != st.tiles.end()) touched.push_back(&it->second);
+    if (it != st.tiles.end()) touched.push_back(&it->second), it->second.pending = 0;
   }
   st.touched.clear();
   st.stats.refitted_tiles = keys.size();

@@ -39,6 +39,12 @@ struct GroundSegmentationConfig {
   double gamma = 0.6;          // pair-site height-contrast weight
   int icm_iterations = 20;     // ICM sweeps at most
   int threads = 0;             // 0: all cores
+  // Incremental segmentation: a tile that gains voxels waits until they make up this share of its
+  // voxels before it is re-segmented (its new voxels stay unlabelled until then); 0: at once. A
+  // spinning lidar adds a trickle of voxels to hundreds of far tiles every frame: on a 1000-frame
+  // urban run 0.1 took the per-frame median from 59 to 30 ms and p95 from 102 to 43 ms with the same
+  // final labels (the whole map is segmented at the end) and 1615 instead of 1664 estimated cells.
+  double defer_share = 0.1;
 };
 
 // Parses "global"/"local" and "icm"/"mincut"; false if unknown.

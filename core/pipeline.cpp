@@ -150,15 +150,9 @@ void Pipeline::processReady(const SensorFrame& frame) {
   rec.new_voxels = map_.insert(world, static_cast<std::uint32_t>(frame.index), has_image ? &colours : nullptr);
   rec.voxels = map_.size();
   const std::vector<std::uint32_t> new_ids = map_.takeNewVoxels();
-  // the tiles that gained voxels are re-segmented; existing voxels only refine their mean height,
-  // which the whole-map segmentation at finish() takes in
-  std::vector<Point3> new_voxels;
-  new_voxels.reserve(new_ids.size());
-  for (const std::uint32_t n : new_ids) {
-    const Voxel& v = map_.voxels()[n];
-    new_voxels.emplace_back((v.index.x() + 0.5) * map_.voxelSize(), (v.index.y() + 0.5) * map_.voxelSize(), v.height);
-  }
-  incremental_.touch(new_voxels, map_.voxelSize());
+  // the incremental segmentation re-segments the tiles that gained voxels (ground.defer_share);
+  // existing voxels only refine their mean height, which the whole-map segmentation at finish()
+  // takes in
   dirty_ = dirty_ || !new_ids.empty();
   rec.voxel_ms = msSince(t);
 

@@ -231,3 +231,44 @@ TEST(IncrementalGroundSegmentationTest, SameLabelsWhateverTheThreadCount) {
 
 }  // namespace
 }  // namespace terrain
+
+namespace terrain {
+namespace {
+
+// One 6 m tile of flat ground, then a few voxels more in it: with defer_share they wait (unlabelled)
+// until they make up that share of the tile's voxels.
+TEST(IncrementalGroundSegmentationTest, DeferredTilesWaitForTheirShareOfNewVoxels) {
+  std::vector<Point3> ground;
+  for (int i = 0; i < 30; ++i) {
+    for (int j = 0; j < 30; ++j) ground.emplace_back(0.1 + 0.2 * i, 0.1 + 0.2 * j, 0.0);
+  }
+  auto box = [](int n, double z) {  // n voxels of a box 1 m up, in the same tile
+    std::vector<Point3> pts;
+    for (int i = 0; i < n; ++i) pts.emplace_back(2.1 + 0.2 * (i % 10), 2.1 + 0.2 * (i / 10), z);
+    return pts;
+  };
+  for (const double share : {0.0, 0.1}) {
+    VoxelMap map(VoxelMapConfig{0.2});
+    GroundSegmentationConfig cfg;
+    cfg.defer_share = share;
+    IncrementalGroundSegmentation inc(cfg);
+    map.insert(ground, 0);
+    inc.update(map);
+    EXPECT_EQ(inc.lastStats().touched_tiles, 1u);
+    // 20 new voxels: 20 / 920 < 0.1, so with the share they wait
+    const std::size_t first_box = map.size();
+    map.insert(box(20, 1.1), 1);
+    inc.update(map);
+    EXPECT_EQ(inc.lastStats().touched_tiles, share > 0 ? 0u : 1u) << share;
+    EXPECT_EQ(map.voxels()[first_box].label, share > 0 ? VoxelLabel::Unknown : VoxelLabel::NonGround) << share;
+    // 80 more in a layer above: 100 new voxels since the tile was last segmented, 100 / 1000 >= 0.1
+    map.insert(box(80, 1.3), 2);
+    inc.update(map);
+    EXPECT_EQ(inc.lastStats().touched_tiles, 1u) << share;
+    EXPECT_EQ(map.voxels()[first_box].label, VoxelLabel::NonGround) << share;
+    EXPECT_EQ(map.voxels()[0].label, VoxelLabel::Ground) << share;
+  }
+}
+
+}  // namespace
+}  // namespace terrain
