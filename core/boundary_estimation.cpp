@@ -112,50 +112,47 @@ class ObjectGrid {
 
 }  // namespace
 
-Skyline skylineOf(const cv::Mat& boundary, const Pose& world_from_camera) {
-  Skyline sky;
-  sky.world_from_camera = world_from_camera;
-  if (boundary.empty() || boundary.type() != CV_8UC1) return sky;
-  sky.top.assign(boundary.cols, -1);
+std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary) {
+  std::vector<std::int16_t> top;
+  if (boundary.empty() || boundary.type() != CV_8UC1) return top;
+  top.assign(boundary.cols, -1);
   int missing = boundary.cols;
   for (int row = 0; row < boundary.rows && missing > 0; ++row) {
     const std::uint8_t* p = boundary.ptr<std::uint8_t>(row);
     for (int u = 0; u < boundary.cols; ++u) {
-      if (p[u] && sky.top[u] < 0) sky.top[u] = static_cast<std::int16_t>(row), --missing;
+      if (p[u] && top[u] < 0) top[u] = static_cast<std::int16_t>(row), --missing;
     }
   }
-  return sky;
+  return top;
 }
 
-namespace {
-
-// the top searched above each vertex is its column's topmost boundary pixel, from the skyline
-BoundaryEstimationStats estimateFromSkyline(TerrainMesh& mesh, const VoxelMap& map, const Skyline& sky,
-                                            const CameraIntrinsics& k, const BoundaryEstimationConfig& cfg,
-                                            const cv::Mat& rgb) {
+BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
+                                           const CameraIntrinsics& k, const Pose& world_from_camera,
+                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
   BoundaryEstimationStats stats;
-  if (sky.top.empty()) return stats;
-  const Pose& world_from_camera = sky.world_from_camera;
+  // the object's top above a vertex: the topmost boundary pixel of its column, found once per column
+  const std::vector<std::int16_t> tops_px = topBoundaryRows(boundary);
+  if (tops_px.empty()) return stats;
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
   const double cell = map.voxelSize();
-  const int cols = static_cast<int>(sky.top.size());
+  const int cols = static_cast<int>(tops_px.size());
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
   Objects objects;
   std::optional<ObjectGrid> grid;
-  std::vector<double> tops;
+  std::vector<double> object_tops;
   if (cfg.clear_line) {
     objects = findObjects(mesh, map);
     grid.emplace(mesh, map, objects, 1.0);
     // each object's known top: its highest recovered height, unknown (+inf) before any estimate
-    tops.assign(objects.count, -std::numeric_limits<double>::infinity());
+    object_tops.assign(objects.count, -std::numeric_limits<double>::infinity());
     for (std::size_t j = 0; j < vertices.size(); ++j) {
       if (objects.of[j] >= 0 && !vertices[j].estimates.empty()) {
-        tops[objects.of[j]] = std::max(tops[objects.of[j]], static_cast<double>(vertices[j].recovered_height));
+        object_tops[objects.of[j]] = std::max(object_tops[objects.of[j]], static_cast<double>(vertices[j].recovered_height));
       }
     }
-    for (double& top : tops) {
+    for (double& top : object_tops) {
       if (!std::isfinite(top)) top = std::numeric_limits<double>::infinity();
     }
   }
@@ -171,7 +168,7 @@ BoundaryEstimationStats estimateFromSkyline(TerrainMesh& mesh, const VoxelMap& m
     // the object's top: the topmost boundary pixel in the column above the vertex
     const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
     if (u >= cols) continue;
-    const int top = sky.top[u];
+    const int top = tops_px[u];
     if (top < 0 || top > v || top <= cfg.top_margin) continue;
     if (sky_test && top < rgb.rows && !skyAbove(rgb, u, top, cfg)) {
       ++stats.no_sky;
@@ -181,7 +178,7 @@ BoundaryEstimationStats estimateFromSkyline(TerrainMesh& mesh, const VoxelMap& m
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
     if (grid) {
-      if (grid->otherMayOwn(centre, dir, cfg.max_distance, objects.of[i], Eigen::Vector2d(x, y), 1.0, tops, 1.0)) {
+      if (grid->otherMayOwn(centre, dir, cfg.max_distance, objects.of[i], Eigen::Vector2d(x, y), 1.0, object_tops, 1.0)) {
         ++stats.not_clear;
         continue;
       }
@@ -190,15 +187,6 @@ BoundaryEstimationStats estimateFromSkyline(TerrainMesh& mesh, const VoxelMap& m
     ++stats.estimated;
   }
   return stats;
-}
-
-}  // namespace
-
-BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
-                                           const CameraIntrinsics& k, const Pose& world_from_camera,
-                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
-  if (boundary.empty() || boundary.type() != CV_8UC1) return {};
-  return estimateFromSkyline(mesh, map, skylineOf(boundary, world_from_camera), k, cfg, rgb);
 }
 
 int spreadEstimates(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& cfg) {

@@ -38,13 +38,9 @@ struct BoundaryEstimationConfig {
   double spread_distance = 0.0;  // [m]
 };
 
-// One camera frame reduced to what 3D boundary estimation needs: the camera pose and, per image
-// column, the topmost boundary pixel row (-1: no boundary in the column).
-struct Skyline {
-  Pose world_from_camera = Pose::Identity();
-  std::vector<std::int16_t> top;
-};
-Skyline skylineOf(const cv::Mat& boundary, const Pose& world_from_camera);
+// Per column of a boundary image (CV_8UC1), its topmost boundary pixel's row, -1 where the column
+// has none: the top searched above each vertex. Empty for an empty or non-CV_8UC1 image.
+std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary);
 
 struct BoundaryEstimationStats {
   int projected = 0;  // non-ground vertices that fell inside the image

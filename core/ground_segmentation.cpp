@@ -160,10 +160,19 @@ Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
   return near2.plane(ref);
 }
 
-// The plane-fit candidates of a tile of k x k columns whose lowest voxel heights are `low` (row
-// major, +inf for an empty column; the tile's first column is (cx, cy)): the lowest column of every
-// 2 x 2 block, at that column's centre. A quarter of the columns fix a plane as well as all of them.
-void blockMinima(const std::vector<float>& low, int k, int cx, int cy, double cell, std::vector<Point3>& out) {
+// The plane-fit candidates of a tile of k x k columns whose first column is (cx, cy) and whose voxels
+// are ids[0..n): the lowest voxel of every column, and of those the lowest of every 2 x 2 block of
+// columns, at its column's centre. A quarter of the columns fix a plane as well as all of them.
+// The whole-map and the incremental segmentation both take a tile's candidates from here.
+void tileCandidates(const std::vector<Voxel>& voxels, const std::uint32_t* ids, std::size_t n, int k, int cx, int cy,
+                    double cell, std::vector<Point3>& out) {
+  std::vector<float> low(static_cast<std::size_t>(k) * k, std::numeric_limits<float>::infinity());
+  for (std::size_t j = 0; j < n; ++j) {
+    const auto& v = voxels[ids[j]];
+    float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k + (v.index.x() - cx)];
+    l = std::min(l, v.height);
+  }
+  out.clear();
   for (int r = 0; r < k; r += 2) {
     for (int c = 0; c < k; c += 2) {
       float best = std::numeric_limits<float>::infinity();
@@ -216,20 +225,14 @@ class GroundHeight {
       const auto& v = voxels[ids[j]];
       px[j] = (v.index.x() + 0.5) * cell_, py[j] = (v.index.y() + 0.5) * cell_, ph[j] = v.height;
     });
-    // the lowest voxel of every column, per tile
+    // the plane-fit candidates of every tile
     std::vector<std::vector<Point3>> lowest(tiles);
     tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
       if (start[t] == start[t + 1]) return;
-      std::vector<float> low(static_cast<std::size_t>(k_) * k_, std::numeric_limits<float>::infinity());
       const int cx = (static_cast<int>(t % nx_) + tx0_) * k_, cy = (static_cast<int>(t / nx_) + ty0_) * k_;
-      for (std::uint32_t j = start[t]; j < start[t + 1]; ++j) {
-        const auto& v = voxels[ids[j]];
-        float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k_ + (v.index.x() - cx)];
-        l = std::min(l, v.height);
-      }
-      blockMinima(low, k_, cx, cy, cell_, lowest[t]);
+      tileCandidates(voxels, ids.data() + start[t], start[t + 1] - start[t], k_, cx, cy, cell_, lowest[t]);
     });
-    // per tile: a plane through the window's column minima, then the histogram of heights above it
+    // per tile: a plane through the window's plane-fit candidates, then the histogram of heights above it
     planes_.assign(tiles, Plane{});
     has_plane_.assign(tiles, 0);
     tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
@@ -495,7 +498,7 @@ struct IncrementalGroundSegmentation::State {
     int tx = 0, ty = 0;
     std::vector<std::uint32_t> ids;  // in id order
     std::size_t pending = 0;         // voxels added since it was last re-segmented
-    std::vector<Point3> lowest;      // the lowest voxel of every column, rows then columns
+    std::vector<Point3> lowest;      // its plane-fit candidates (tileCandidates)
     Plane plane;
   };
   std::unordered_map<std::uint64_t, Tile> tiles;
@@ -512,20 +515,12 @@ struct IncrementalGroundSegmentation::State {
   }
   std::pair<int, int> tileOf(const VoxelIndex& i) const { return {floorDiv(i.x(), k), floorDiv(i.y(), k)}; }
 
-  // the lowest voxel of every column of a tile, in the order GroundHeight lists them
+  // a tile's plane-fit candidates, as GroundHeight takes them
   void findLowest(Tile& t, const std::vector<Voxel>& voxels) const {
-    std::vector<float> low(static_cast<std::size_t>(k) * k, std::numeric_limits<float>::infinity());
-    const int cx = t.tx * k, cy = t.ty * k;
-    for (std::uint32_t id : t.ids) {
-      const auto& v = voxels[id];
-      float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k + (v.index.x() - cx)];
-      l = std::min(l, v.height);
-    }
-    t.lowest.clear();
-    blockMinima(low, k, cx, cy, cell, t.lowest);
+    tileCandidates(voxels, t.ids.data(), t.ids.size(), k, t.tx * k, t.ty * k, cell, t.lowest);
   }
 
-  // the plane of one tile, as GroundHeight fits it: through the lowest voxel of every column of
+  // the plane of one tile, as GroundHeight fits it: through the plane-fit candidates of
   // its window, then raised to the peak of the window's heights above it
   Plane windowPlane(const Tile& t, const std::vector<Voxel>& voxels) const {
     std::vector<const Tile*> window;
