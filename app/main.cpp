@@ -85,7 +85,7 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
 void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_file, std::string& histogram,
                         std::string& solver) {
   cmd.add_option("--config", config_file, "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
-                                          "estimation); command-line options override it");
+                                          "estimation, footprint); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
   cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
       ->capture_default_str();
@@ -104,6 +104,11 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")->capture_default_str();
   cmd.add_flag("--clear-line,!--no-clear-line", c.estimation.clear_line,
                "skip a frame's estimate when another sensed object stands in the vertex's image column (default: on)");
+  cmd.add_flag("--sky-test,!--no-sky-test", c.estimation.require_sky_above,
+               "accept a top boundary only with daylight sky just above it (default: on)");
+  cmd.add_flag("--footprints,!--no-footprints", c.footprint.enabled,
+               "complete building footprints from two walls of a corner and roof them at the walls' recovered height "
+               "(default: on)");
   cmd.add_option("--spread-distance", c.estimation.spread_distance,
                  "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();
@@ -154,6 +159,13 @@ void printScorecard(const nlohmann::json& r) {
       std::cout << " never in view: " << h["by_camera_view"]["never_in_camera_view"]["after"]["cells"].get<std::size_t>() << " cells";
     }
     std::cout << "\n    object edge cells raised (a wall or crown within 0.5 m): " << h.value("raised_edge_cells", 0) << "\n";
+  }
+  if (h.contains("footprints")) {
+    const auto& f = h["footprints"];
+    std::cout << "    building footprints completed: " << f["completed"].get<std::size_t>() << ", roof cells "
+              << f["roof_cells"].get<std::size_t>() << " (" << f["object_cells"].get<std::size_t>() << " over objects, MAE "
+              << f["on_objects"]["mae_m"].get<double>() << " m; " << f["wrongly_filled_cells"].get<std::size_t>()
+              << " over terrain)\n";
   }
   if (r["height_baselines"].contains("inpainting")) {
     const auto& b = r["height_baselines"];

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <unordered_map>
 
 namespace terrain::app {
 
@@ -30,31 +31,66 @@ std::array<std::uint8_t, 3> vertexColour(const Pipeline& p, const MeshVertex& m)
   return {255, 220, 0};
 }
 
+// The mesh as written: the terrain mesh's vertices, then the roof cells of completed footprints
+// (inferred, never sensed or seen), triangulated together on the grid.
+struct OutputMesh {
+  std::vector<CellIndex> cells;
+  std::vector<float> heights;
+  std::vector<std::array<std::uint8_t, 3>> colours;
+  std::vector<std::uint8_t> unseen, recovered, inferred;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+OutputMesh outputMesh(const Pipeline& p) {
+  OutputMesh out;
+  std::unordered_map<std::uint64_t, std::uint32_t> index;
+  auto key = [](const CellIndex& c) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
+  };
+  auto add = [&](const CellIndex& c, float h, std::array<std::uint8_t, 3> colour, bool unseen, bool recovered, bool inferred) {
+    index.emplace(key(c), static_cast<std::uint32_t>(out.cells.size()));
+    out.cells.push_back(c);
+    out.heights.push_back(h);
+    out.colours.push_back(colour);
+    out.unseen.push_back(unseen);
+    out.recovered.push_back(recovered);
+    out.inferred.push_back(inferred);
+  };
+  for (const auto& m : p.mesh().vertices()) {
+    add(m.cell, m.height(), vertexColour(p, m), !p.map().voxels()[m.top_voxel].coloured, m.raised(), false);
+  }
+  for (const auto& r : p.roofCells()) add(r.cell, r.height, {255, 220, 0}, true, true, true);
+  out.triangles = gridTriangles(out.cells, [&](const CellIndex& c) -> std::int64_t {
+    const auto it = index.find(key(c));
+    return it == index.end() ? -1 : static_cast<std::int64_t>(it->second);
+  });
+  return out;
+}
+
 template <typename T>
 void append(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof v);
 }
 
-void writePly(const fs::path& path, const Pipeline& p) {
-  const auto& verts = p.mesh().vertices();
-  const auto tris = p.mesh().triangles();
+void writePly(const fs::path& path, const Pipeline& p, const OutputMesh& mesh) {
   const double cell = p.map().voxelSize();
   std::ostringstream h;
-  h << "ply\nformat binary_little_endian 1.0\ncomment terrain reconstruction, world ENU [m]; unseen = never in a camera image\n"
-    << "element vertex " << verts.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
+  h << "ply\nformat binary_little_endian 1.0\ncomment terrain reconstruction, world ENU [m]; unseen = never in a camera image; "
+       "inferred = roof of a completed building footprint, not sensed\n"
+    << "element vertex " << mesh.cells.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
     << "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar unseen\nproperty uchar recovered\n"
-    << "element face " << tris.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    << "property uchar inferred\nelement face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
   std::string s = h.str();
-  for (const auto& m : verts) {
-    append(s, static_cast<float>((m.cell.x() + 0.5) * cell));
-    append(s, static_cast<float>((m.cell.y() + 0.5) * cell));
-    append(s, m.height());
-    const auto c = vertexColour(p, m);
-    s.append(reinterpret_cast<const char*>(c.data()), 3);
-    append(s, static_cast<std::uint8_t>(!p.map().voxels()[m.top_voxel].coloured));
-    append(s, static_cast<std::uint8_t>(m.raised()));
+  for (std::size_t i = 0; i < mesh.cells.size(); ++i) {
+    append(s, static_cast<float>((mesh.cells[i].x() + 0.5) * cell));
+    append(s, static_cast<float>((mesh.cells[i].y() + 0.5) * cell));
+    append(s, mesh.heights[i]);
+    s.append(reinterpret_cast<const char*>(mesh.colours[i].data()), 3);
+    append(s, mesh.unseen[i]);
+    append(s, mesh.recovered[i]);
+    append(s, mesh.inferred[i]);
   }
-  for (const auto& t : tris) {
+  for (const auto& t : mesh.triangles) {
     append(s, static_cast<std::uint8_t>(3));
     for (auto i : t) append(s, static_cast<std::int32_t>(i));
   }
@@ -66,40 +102,39 @@ struct Grid {
   int x0 = 0, y0 = 0, width = 0, height = 0;
 };
 
-Grid gridOf(const TerrainMesh& mesh) {
+Grid gridOf(const OutputMesh& mesh) {
   Grid g;
-  if (mesh.vertices().empty()) return g;
-  const auto [lo, hi] = mesh.cellBounds();
-  g.x0 = lo.x(), g.y0 = lo.y();
-  g.width = hi.x() - lo.x() + 1;
-  g.height = hi.y() - lo.y() + 1;
+  if (mesh.cells.empty()) return g;
+  int x0 = mesh.cells[0].x(), x1 = x0, y0 = mesh.cells[0].y(), y1 = y0;
+  for (const auto& c : mesh.cells) x0 = std::min(x0, c.x()), x1 = std::max(x1, c.x()), y0 = std::min(y0, c.y()), y1 = std::max(y1, c.y());
+  g.x0 = x0, g.y0 = y0;
+  g.width = x1 - x0 + 1;
+  g.height = y1 - y0 + 1;
   return g;
 }
 
-void writeObj(const fs::path& dir, const Pipeline& p) {
-  const auto& verts = p.mesh().vertices();
-  const auto tris = p.mesh().triangles();
+void writeObj(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
   const double cell = p.map().voxelSize();
-  const Grid g = gridOf(p.mesh());
+  const Grid g = gridOf(mesh);
   // texture: one texel per cell, north up
   cv::Mat tex(std::max(1, g.height), std::max(1, g.width), CV_8UC3, cv::Scalar(0, 220, 255));
   std::ostringstream obj;
   obj << "# terrain reconstruction, world ENU [m]\nmtllib mesh.mtl\nusemtl terrain\n";
   char line[128];
-  for (const auto& m : verts) {
-    std::snprintf(line, sizeof line, "v %.3f %.3f %.3f\n", (m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell,
-                  m.height());
+  for (std::size_t i = 0; i < mesh.cells.size(); ++i) {
+    const CellIndex& c = mesh.cells[i];
+    std::snprintf(line, sizeof line, "v %.3f %.3f %.3f\n", (c.x() + 0.5) * cell, (c.y() + 0.5) * cell, mesh.heights[i]);
     obj << line;
-    const int col = m.cell.x() - g.x0, row = g.height - 1 - (m.cell.y() - g.y0);
-    const auto c = vertexColour(p, m);
-    tex.at<cv::Vec3b>(row, col) = cv::Vec3b(c[2], c[1], c[0]);
+    const int col = c.x() - g.x0, row = g.height - 1 - (c.y() - g.y0);
+    const auto& rgb = mesh.colours[i];
+    tex.at<cv::Vec3b>(row, col) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);
   }
-  for (const auto& m : verts) {
-    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", (m.cell.x() - g.x0 + 0.5) / std::max(1, g.width),
-                  (m.cell.y() - g.y0 + 0.5) / std::max(1, g.height));
+  for (const auto& c : mesh.cells) {
+    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", (c.x() - g.x0 + 0.5) / std::max(1, g.width),
+                  (c.y() - g.y0 + 0.5) / std::max(1, g.height));
     obj << line;
   }
-  for (const auto& t : tris) obj << "f " << t[0] + 1 << '/' << t[0] + 1 << ' ' << t[1] + 1 << '/' << t[1] + 1 << ' ' << t[2] + 1 << '/' << t[2] + 1 << '\n';
+  for (const auto& t : mesh.triangles) obj << "f " << t[0] + 1 << '/' << t[0] + 1 << ' ' << t[1] + 1 << '/' << t[1] + 1 << ' ' << t[2] + 1 << '/' << t[2] + 1 << '\n';
   io::writeFileAtomic(dir / "mesh.obj", obj.str(), true);
   io::writeFileAtomic(dir / "mesh.mtl", "newmtl terrain\nKa 1 1 1\nKd 1 1 1\nmap_Kd mesh_texture.png\n", true);
   writePng(dir / "mesh_texture.png", tex);
@@ -192,12 +227,14 @@ void writeBoundaryImages(const fs::path& dir, int frame, const BoundaryImages& i
 }
 
 void writeReconstruction(const fs::path& dir, const Pipeline& p) {
-  writePly(dir / "mesh.ply", p);
-  writeObj(dir, p);
+  const OutputMesh mesh = outputMesh(p);
+  writePly(dir / "mesh.ply", p, mesh);
+  writeObj(dir, p, mesh);
   writeVoxelPcd(dir / "voxels.pcd", p);
   writeTiming(dir, p);
-  // height maps before and after recovery, on one colour scale
-  const Grid g = gridOf(p.mesh());
+  // height maps before and after recovery, on one colour scale; the roofs of completed footprints
+  // only after
+  const Grid g = gridOf(mesh);
   if (g.width > 0) {
     cv::Mat before(g.height, g.width, CV_32FC1, cv::Scalar(std::nanf(""))), after = before.clone();
     double lo = 1e9, hi = -1e9;
@@ -208,8 +245,12 @@ void writeReconstruction(const fs::path& dir, const Pipeline& p) {
       lo = std::min(lo, static_cast<double>(m.sensed_height));
       hi = std::max(hi, static_cast<double>(m.height()));
     }
+    for (const auto& r : p.roofCells()) {
+      after.at<float>(g.height - 1 - (r.cell.y() - g.y0), r.cell.x() - g.x0) = r.height;
+      hi = std::max(hi, static_cast<double>(r.height));
+    }
     writePng(dir / "height_before.png", renderHeightMap(before, lo, hi, "height, sensed only (north up)"));
-    writePng(dir / "height_after.png", renderHeightMap(after, lo, hi, "height after 3D boundary estimation"));
+    writePng(dir / "height_after.png", renderHeightMap(after, lo, hi, "height after 3D boundary estimation and footprint completion"));
   }
   nlohmann::json w = p.warnings();
   io::writeFileAtomic(dir / "warnings.json", w.dump(1) + "\n", true);

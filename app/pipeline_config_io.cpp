@@ -63,6 +63,13 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
       {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
       {"estimation.spread_distance", num(c.estimation.spread_distance)},
+      {"footprint.enabled", [&c](const YAML::Node& n) { c.footprint.enabled = n.as<bool>(); }},
+      {"footprint.min_side", num(c.footprint.min_side)},
+      {"footprint.wall_tolerance", num(c.footprint.wall_tolerance)},
+      {"footprint.min_wall_share", num(c.footprint.min_wall_share)},
+      {"footprint.min_side_support", num(c.footprint.min_side_support)},
+      {"footprint.max_inside_share", num(c.footprint.max_inside_share)},
+      {"footprint.min_raised", integer(c.footprint.min_raised)},
   };
 }
 
@@ -95,12 +102,21 @@ void validate(const PipelineConfig& c) {
   require(c.estimation.max_height > 0, "estimation.max_height", c.estimation.max_height, "> 0 m");
   require(c.estimation.spread_distance >= 0 && c.estimation.spread_distance <= 200, "estimation.spread_distance",
           c.estimation.spread_distance, "[0, 200] m");
+  require(c.footprint.min_side > 0, "footprint.min_side", c.footprint.min_side, "> 0 m");
+  require(c.footprint.wall_tolerance >= 0 && c.footprint.wall_tolerance <= 10, "footprint.wall_tolerance", c.footprint.wall_tolerance,
+          "[0, 10] m");
+  for (const auto& [name, share] : {std::pair{"footprint.min_wall_share", c.footprint.min_wall_share},
+                                    {"footprint.min_side_support", c.footprint.min_side_support},
+                                    {"footprint.max_inside_share", c.footprint.max_inside_share}}) {
+    require(share >= 0 && share <= 1, name, share, "[0, 1]");
+  }
+  require(c.footprint.min_raised >= 1, "footprint.min_raised", c.footprint.min_raised, ">= 1");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
           c.estimation.fusion_quantile, "[0, 1]");
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation");
+  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint");
 }
 
 std::string pipelineConfigToJson(const PipelineConfig& c) {
@@ -124,6 +140,10 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                      {"clear_line", c.estimation.clear_line}, {"require_sky_above", c.estimation.require_sky_above},
                      {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
                      {"spread_distance", c.estimation.spread_distance}};
+  j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
+                    {"wall_tolerance", c.footprint.wall_tolerance}, {"min_wall_share", c.footprint.min_wall_share},
+                    {"min_side_support", c.footprint.min_side_support}, {"max_inside_share", c.footprint.max_inside_share},
+                    {"min_raised", c.footprint.min_raised}};
   return j.dump();
 }
 

@@ -28,41 +28,10 @@ bool nonGround(const MeshVertex& m, const VoxelMap& map) {
   return map.voxels()[m.top_voxel].label == VoxelLabel::NonGround;
 }
 
-// The objects the lidar saw: 8-connected groups of non-ground vertices.
-struct Objects {
-  std::vector<std::int32_t> of;  // per vertex: its group, -1 for ground
-  std::int32_t count = 0;        // groups
-};
-
-Objects findObjects(const TerrainMesh& mesh, const VoxelMap& map) {
-  const auto& vertices = mesh.vertices();
-  Objects out;
-  out.of.assign(vertices.size(), -1);
-  std::vector<std::uint32_t> group;
-  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
-    if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
-    const std::int32_t id = out.count++;
-    group.assign(1, i);
-    out.of[i] = id;
-    for (std::size_t q = 0; q < group.size(); ++q) {
-      const CellIndex c = vertices[group[q]].cell;
-      for (int dx = -1; dx <= 1; ++dx) {
-        for (int dy = -1; dy <= 1; ++dy) {
-          const std::int64_t j = mesh.find(c + CellIndex(dx, dy));
-          if (j < 0 || out.of[j] >= 0 || !nonGround(vertices[j], map)) continue;
-          out.of[j] = id;
-          group.push_back(static_cast<std::uint32_t>(j));
-        }
-      }
-    }
-  }
-  return out;
-}
-
 // Which object stands where, on a coarse grid: what else a skyline pixel could belong to.
 class ObjectGrid {
  public:
-  ObjectGrid(const TerrainMesh& mesh, const VoxelMap& map, const Objects& objects, double size) : size_(size) {
+  ObjectGrid(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects, double size) : size_(size) {
     const auto& vertices = mesh.vertices();
     if (vertices.empty()) return;
     const double cell = map.voxelSize();
@@ -112,6 +81,31 @@ class ObjectGrid {
 
 }  // namespace
 
+MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map) {
+  const auto& vertices = mesh.vertices();
+  MeshObjects out;
+  out.of.assign(vertices.size(), -1);
+  std::vector<std::uint32_t> group;
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
+    const std::int32_t id = out.count++;
+    group.assign(1, i);
+    out.of[i] = id;
+    for (std::size_t q = 0; q < group.size(); ++q) {
+      const CellIndex c = vertices[group[q]].cell;
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          const std::int64_t j = mesh.find(c + CellIndex(dx, dy));
+          if (j < 0 || out.of[j] >= 0 || !nonGround(vertices[j], map)) continue;
+          out.of[j] = id;
+          group.push_back(static_cast<std::uint32_t>(j));
+        }
+      }
+    }
+  }
+  return out;
+}
+
 std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary) {
   std::vector<std::int16_t> top;
   if (boundary.empty() || boundary.type() != CV_8UC1) return top;
@@ -139,11 +133,11 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const int cols = static_cast<int>(tops_px.size());
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
-  Objects objects;
+  MeshObjects objects;
   std::optional<ObjectGrid> grid;
   std::vector<double> object_tops;
   if (cfg.clear_line) {
-    objects = findObjects(mesh, map);
+    objects = findMeshObjects(mesh, map);
     grid.emplace(mesh, map, objects, 1.0);
     // each object's known top: its highest recovered height, unknown (+inf) before any estimate
     object_tops.assign(objects.count, -std::numeric_limits<double>::infinity());

@@ -28,8 +28,13 @@ struct BoundaryEstimationConfig {
   bool clear_line = true;
   // Accept a top boundary only if the pixels just above it look like daylight sky (blue at least
   // sky_blue_margin grey levels above red and not below green, mean brightness >= sky_min_brightness):
-  // an object that runs off the top of the image has more of itself above its topmost edge.
-  bool require_sky_above = false;  // off: on the CI suite it helps urban, flat, slope, rough, mixed but hurts forest
+  // an object that runs off the top of the image has more of itself above its topmost edge (a
+  // facade's horizontal texture edge was taken for its roof line: roofs at half height). Measured on
+  // 60 frames (seed 1-3 urban, seed 1 flat, mixed, forest): roof height error of completed
+  // footprints 3.4 / 5.0 / 7.6 m -> 1.6 / 0.8 / 5.9 m on urban, 0.5 -> 0.7 flat, 1.6 -> 2.0 mixed;
+  // error over estimated forest cells 10.5 -> 11.9 m. The colour test suits a clear daytime sky:
+  // under overcast or at dusk check the thresholds against the camera, or turn it off.
+  bool require_sky_above = true;
   int sky_blue_margin = 10;
   int sky_min_brightness = 100;
   // Vertices of an object that never got an estimate of their own (the camera never saw their
@@ -37,6 +42,14 @@ struct BoundaryEstimationConfig {
   // neighbouring non-ground vertices, up to spread_distance away; 0 turns this off.
   double spread_distance = 0.0;  // [m]
 };
+
+// The objects the lidar saw: 8-connected groups of mesh vertices whose top voxel is non-ground,
+// numbered in the order of their lowest vertex id.
+struct MeshObjects {
+  std::vector<std::int32_t> of;  // per vertex: its object, -1 for a ground vertex
+  std::int32_t count = 0;        // objects
+};
+MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map);
 
 // Per column of a boundary image (CV_8UC1), its topmost boundary pixel's row, -1 where the column
 // has none: the top searched above each vertex. Empty for an empty or non-CV_8UC1 image.

@@ -87,6 +87,7 @@ void Pipeline::finish() {
     if (map_.voxels()[m.top_voxel].label == VoxelLabel::Ground) m.estimates.clear();
   }
   spreadEstimates(mesh_, map_, config_.estimation);
+  completeFootprints();
   for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
   if (!map_.voxels().empty()) {
     std::size_t ground = 0;
@@ -109,7 +110,14 @@ bool Pipeline::restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertic
   records_ = std::move(records);
   held_.clear();
   dirty_ = false;
+  completeFootprints();
   return true;
+}
+
+void Pipeline::completeFootprints() {
+  footprints_ = terrain::completeFootprints(mesh_, map_, config_.footprint);
+  roofWalls(mesh_, map_, footprints_);
+  roof_cells_ = terrain::roofCells(footprints_, mesh_, map_.voxelSize());
 }
 
 void Pipeline::processReady(const SensorFrame& frame) {

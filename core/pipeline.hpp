@@ -5,6 +5,7 @@
 
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
+#include "core/footprint_completion.hpp"
 #include "core/ground_segmentation.hpp"
 #include "core/pose_estimation.hpp"
 #include "core/sensor_data.hpp"
@@ -23,6 +24,7 @@ struct PipelineConfig {
   GroundSegmentationConfig ground;
   BoundaryDetectionConfig boundary;
   BoundaryEstimationConfig estimation;
+  FootprintConfig footprint;
   int segment_every = 1;  // run ground segmentation every this many frames (and at the end)
 };
 
@@ -50,6 +52,9 @@ class Pipeline {
   const VoxelMap& map() const { return map_; }
   const TerrainMesh& mesh() const { return mesh_; }
   const SegmentationResult& segmentation() const { return segmentation_; }
+  // the building footprints completed at finish() (footprint completion) and their roof cells
+  const std::vector<Footprint>& footprints() const { return footprints_; }
+  const std::vector<RoofCell>& roofCells() const { return roof_cells_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   const std::vector<std::string>& warnings() const { return warnings_; }
   const PoseEstimator& poses() const { return poses_; }
@@ -68,6 +73,7 @@ class Pipeline {
  private:
   void processReady(const SensorFrame& frame);
   void warn(const std::string& message);
+  void completeFootprints();
 
   RigCalibration calibration_;
   PipelineConfig config_;
@@ -75,6 +81,8 @@ class Pipeline {
   VoxelMap map_;
   TerrainMesh mesh_;
   SegmentationResult segmentation_;          // of the whole map, from finish()
+  std::vector<Footprint> footprints_;        // from finish()
+  std::vector<RoofCell> roof_cells_;
   IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {
     SensorFrame frame;

@@ -66,24 +66,10 @@ void TerrainMesh::addEstimate(std::uint32_t vertex, float height, std::size_t ma
 }
 
 std::vector<std::array<std::uint32_t, 3>> TerrainMesh::triangles() const {
-  std::vector<std::array<std::uint32_t, 3>> tris;
-  for (std::uint32_t i = 0; i < vertices_.size(); ++i) {
-    const CellIndex c = vertices_[i].cell;
-    const std::int64_t right = find({c.x() + 1, c.y()}), up = find({c.x(), c.y() + 1}),
-                       diag = find({c.x() + 1, c.y() + 1});
-    const auto u = [](std::int64_t v) { return static_cast<std::uint32_t>(v); };
-    if (right >= 0 && diag >= 0 && up >= 0) {
-      tris.push_back({i, u(right), u(diag)});
-      tris.push_back({i, u(diag), u(up)});
-    } else if (right >= 0 && diag >= 0) {
-      tris.push_back({i, u(right), u(diag)});
-    } else if (right >= 0 && up >= 0) {
-      tris.push_back({i, u(right), u(up)});
-    } else if (diag >= 0 && up >= 0) {
-      tris.push_back({i, u(diag), u(up)});
-    }
-  }
-  return tris;
+  std::vector<CellIndex> cells;
+  cells.reserve(vertices_.size());
+  for (const auto& m : vertices_) cells.push_back(m.cell);
+  return gridTriangles(cells, [this](const CellIndex& c) { return find(c); });
 }
 
 }  // namespace terrain

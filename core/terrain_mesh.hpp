@@ -27,6 +27,37 @@ struct MeshVertex {
   float height() const { return raised() ? std::max(sensed_height, recovered_height) : sensed_height; }
 };
 
+// Triangles over vertices on a regular grid of cells: two per complete quad, one where a corner is
+// missing; counter-clockwise seen from above. cells[i] is vertex i's cell; find(cell) gives the
+// vertex of a cell, or -1.
+template <typename Find>
+std::vector<std::array<std::uint32_t, 3>> gridTriangles(const std::vector<CellIndex>& cells, Find&& find) {
+  std::vector<std::array<std::uint32_t, 3>> tris;
+  const auto u = [](std::int64_t v) { return static_cast<std::uint32_t>(v); };
+  for (std::uint32_t i = 0; i < cells.size(); ++i) {
+    // the quad whose lower-left corner is vertex i
+    const CellIndex c = cells[i];
+    const std::int64_t right = find(CellIndex(c.x() + 1, c.y())), up = find(CellIndex(c.x(), c.y() + 1)),
+                       diag = find(CellIndex(c.x() + 1, c.y() + 1));
+    if (right >= 0 && diag >= 0 && up >= 0) {
+      tris.push_back({i, u(right), u(diag)});
+      tris.push_back({i, u(diag), u(up)});
+    } else if (right >= 0 && diag >= 0) {
+      tris.push_back({i, u(right), u(diag)});
+    } else if (right >= 0 && up >= 0) {
+      tris.push_back({i, u(right), u(up)});
+    } else if (diag >= 0 && up >= 0) {
+      tris.push_back({i, u(diag), u(up)});
+    }
+    // the quad to its left, when that quad's lower-left corner is missing
+    if (find(CellIndex(c.x() - 1, c.y())) < 0) {
+      const std::int64_t upleft = find(CellIndex(c.x() - 1, c.y() + 1));
+      if (up >= 0 && upleft >= 0) tris.push_back({i, u(up), u(upleft)});
+    }
+  }
+  return tris;
+}
+
 class TerrainMesh {
  public:
   // Updates the columns touched by the given voxels (new or changed).

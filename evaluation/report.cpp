@@ -74,8 +74,8 @@ void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibra
   }
 }
 
-BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, double cell, const sim::World& world,
-                                  const CameraIntrinsics& k, const CameraTruthFrame& f, int tolerance) {
+BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double cell,
+                                  const sim::World& world, const CameraIntrinsics& k, const CameraTruthFrame& f, int tolerance) {
   BoundaryCoverage out;
   const cv::Mat& seg = f.segmentation;
   cv::Mat boundary(seg.size(), CV_8UC1, cv::Scalar(0));
@@ -95,6 +95,10 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, double cell, const si
       const auto px = project(k, camera_from_world * Point3(x, y, height));
       if (px) target->at<std::uint8_t>(static_cast<int>(px->y()), static_cast<int>(px->x())) = 255;
     }
+  }
+  for (const auto& r : roof) {
+    const auto px = project(k, camera_from_world * Point3((r.cell.x() + 0.5) * cell, (r.cell.y() + 0.5) * cell, r.height));
+    if (px) after.at<std::uint8_t>(static_cast<int>(px->y()), static_cast<int>(px->x())) = 255;
   }
   const cv::Mat grow = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * tolerance + 1, 2 * tolerance + 1));
   cv::dilate(before, before, grow);
@@ -170,6 +174,21 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   for (const auto& [id, e] : h.by_object) hr["by_object"][id] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   for (const auto& [kind, e] : h.by_kind) hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
+  // roofs of completed building footprints
+  const RoofScores roof = scoreRoofCells(pipeline.roofCells(), map.voxelSize(), world);
+  hr["footprints"] = {{"completed", pipeline.footprints().size()},
+                      {"roof_cells", roof.cells},
+                      {"object_cells", roof.object_cells},
+                      {"building_cells", roof.building_cells},
+                      {"wrongly_filled_cells", roof.wrongly_filled},
+                      {"on_objects", errorJson(roof.on_objects)}};
+  json& list = hr["footprints"]["list"] = json::array();
+  for (const auto& f : pipeline.footprints()) {
+    json corners = json::array();
+    for (const auto& c : f.corners) corners.push_back({c.x(), c.y()});
+    list.push_back({{"corners_m", corners}, {"roof_height_m", f.roof_height}, {"wall_vertices", f.wall_vertices},
+                    {"raised_vertices", f.raised_vertices}});
+  }
 
   // height baselines on the height map: sensed only, inpainted, recovered
   r["height_baselines"] = json::object();
@@ -183,10 +202,15 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
         sensed.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.sensed_height;
         recovered.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.height();
       }
+      // the recovered map also has the roofs of completed footprints (inside the mesh's extent)
+      for (const auto& rc : pipeline.roofCells()) {
+        const int row = rc.cell.y() - y0, col = rc.cell.x() - x0;
+        if (row >= 0 && col >= 0 && row < recovered.rows && col < recovered.cols) recovered.at<float>(row, col) = rc.height;
+      }
       const cv::Mat inpainted = inpaintHeights(sensed, 10);
       // object cells: the cells of object footprints inside the mapped area
       std::vector<double> e_sensed, e_inpaint, e_recovered;
-      std::size_t cells = 0, c_sensed = 0, c_inpaint = 0;
+      std::size_t cells = 0, c_sensed = 0, c_inpaint = 0, c_recovered = 0;
       const double cs = map.voxelSize();
       for (int r0 = 0; r0 < sensed.rows; r0 += 2) {
         for (int c0 = 0; c0 < sensed.cols; c0 += 2) {
@@ -197,11 +221,8 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
           const double top = world.surfaceHeight(x, y, &geom);
           if (!scenes::isObjectClass(world.geomClass(geom))) continue;
           ++cells;
-          if (std::isfinite(sensed.at<float>(r0, c0))) {
-            ++c_sensed;
-            e_sensed.push_back(sensed.at<float>(r0, c0) - top);
-            e_recovered.push_back(recovered.at<float>(r0, c0) - top);
-          }
+          if (std::isfinite(sensed.at<float>(r0, c0))) ++c_sensed, e_sensed.push_back(sensed.at<float>(r0, c0) - top);
+          if (std::isfinite(recovered.at<float>(r0, c0))) ++c_recovered, e_recovered.push_back(recovered.at<float>(r0, c0) - top);
           if (std::isfinite(si)) ++c_inpaint, e_inpaint.push_back(si - top);
         }
       }
@@ -212,7 +233,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       };
       r["height_baselines"]["sensed_only"] = entry(e_sensed, c_sensed);
       r["height_baselines"]["inpainting"] = entry(e_inpaint, c_inpaint);
-      r["height_baselines"]["boundary_estimation"] = entry(e_recovered, c_sensed);
+      r["height_baselines"]["boundary_estimation"] = entry(e_recovered, c_recovered);
       r["height_baselines"]["object_cells"] = cells;
     }
   }
@@ -222,7 +243,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   std::size_t pixels = 0;
   json frames = json::array();
   for (const auto& c : truth.cameras) {
-    const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), map.voxelSize(), world, pipeline.calibration().camera, c, 3);
+    const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world, pipeline.calibration().camera, c, 3);
     frames.push_back({{"frame", c.frame}, {"before", b.before}, {"after", b.after}, {"boundary_pixels", b.boundary_pixels}});
     before += b.before * b.boundary_pixels;
     after += b.after * b.boundary_pixels;

@@ -46,9 +46,10 @@ struct BoundaryCoverage {
 // trunk, crown) whose upper neighbour belongs to another object, the ground or the sky; one is
 // reproduced when a vertex of the mesh over an object cell, projected at its height into the image,
 // lands within `tolerance` pixels of it. Computed for the sensed heights (before) and the
-// recovered heights (after).
-BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, double voxel_size, const sim::World& world,
-                                  const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame, int tolerance);
+// recovered heights with the roof cells of completed footprints (after).
+BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
+                                  const sim::World& world, const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame,
+                                  int tolerance);
 
 // The full report. Re-runs the segmentation with both solvers on the final map, runs the baselines.
 nlohmann::json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world);

@@ -101,4 +101,23 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
   return out;
 }
 
+RoofScores scoreRoofCells(const std::vector<RoofCell>& roof, double voxel_size, const sim::World& world) {
+  RoofScores out;
+  std::vector<double> errors;
+  for (const auto& r : roof) {
+    const CellTruth t = cellTruth(world, (r.cell.x() + 0.5) * voxel_size, (r.cell.y() + 0.5) * voxel_size, voxel_size);
+    if (!std::isfinite(t.top)) continue;
+    ++out.cells;
+    if (!t.object) {
+      ++out.wrongly_filled;
+      continue;
+    }
+    ++out.object_cells;
+    out.building_cells += world.geomClass(t.geom) == scenes::GeomClass::Building;
+    errors.push_back(r.height - t.top);
+  }
+  out.on_objects = errorStats(errors);
+  return out;
+}
+
 }  // namespace terrain::eval

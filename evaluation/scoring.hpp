@@ -1,6 +1,7 @@
 #pragma once
 // Scores of a reconstruction against the scene's ground truth.
 
+#include "core/footprint_completion.hpp"
 #include "core/terrain_mesh.hpp"
 #include "core/voxel_map.hpp"
 #include "evaluation/ground_truth.hpp"
@@ -44,5 +45,16 @@ struct HeightScores {
 // true robot positions, for the distance bands (distance of a cell to the nearest of them).
 HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const sim::World& world,
                           const std::vector<Point3>& robot_path);
+
+// Roof cells of completed building footprints (cells the mesh has no vertex for) against the truth:
+// on an object's cell the error of the roof height; elsewhere the cell was filled wrongly.
+struct RoofScores {
+  std::size_t cells = 0;            // roof cells with a known truth
+  std::size_t object_cells = 0;     // of which an object is the true top
+  std::size_t building_cells = 0;   // of which a building
+  std::size_t wrongly_filled = 0;   // of which terrain is the true top
+  ErrorStats on_objects;            // roof height - true top over object_cells [m]
+};
+RoofScores scoreRoofCells(const std::vector<RoofCell>& roof, double voxel_size, const sim::World& world);
 
 }  // namespace terrain::eval

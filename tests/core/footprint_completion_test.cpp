@@ -1,0 +1,175 @@
+#include "core/footprint_completion.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+namespace terrain {
+namespace {
+
+// A map of 0.2 m cells: wall cells (non-ground, sensed 3 m high, the first `raised` of them with a
+// 10 m estimate) and ground cells (0 m).
+struct Scene {
+  VoxelMap map{VoxelMapConfig{0.2}};
+  TerrainMesh mesh;
+  Scene(const std::vector<CellIndex>& walls, std::size_t raised, const std::vector<CellIndex>& ground) {
+    std::vector<Voxel> voxels;
+    std::vector<MeshVertex> vertices;
+    auto add = [&](const CellIndex& c, float height, VoxelLabel label) {
+      Voxel v;
+      v.index = VoxelIndex(c.x(), c.y(), static_cast<int>(std::floor(height / 0.2)));
+      v.height = height;
+      v.label = label;
+      MeshVertex m;
+      m.cell = c;
+      m.top_voxel = static_cast<std::uint32_t>(voxels.size());
+      m.sensed_height = height;
+      voxels.push_back(v);
+      vertices.push_back(m);
+    };
+    for (const auto& c : walls) add(c, 3.0f, VoxelLabel::NonGround);
+    for (const auto& c : ground) add(c, 0.0f, VoxelLabel::Ground);
+    EXPECT_TRUE(map.restore(voxels));
+    EXPECT_TRUE(mesh.restore(vertices));
+    for (std::size_t i = 0; i < raised && i < walls.size(); ++i) mesh.addEstimate(static_cast<std::uint32_t>(i), 10.0f, 15);
+  }
+};
+
+// The building occupies x in [2, 8) m and y in [2, 6) m: cells 10-39 by 10-29. The robot saw its
+// south wall (row 10) and its west wall (column 10); nothing inside was sensed.
+std::vector<CellIndex> southWall() {
+  std::vector<CellIndex> cells;
+  for (int x = 10; x < 40; ++x) cells.emplace_back(x, 10);
+  return cells;
+}
+std::vector<CellIndex> southAndWestWalls() {
+  std::vector<CellIndex> cells = southWall();
+  for (int y = 11; y < 30; ++y) cells.emplace_back(10, y);
+  return cells;
+}
+// ground south and west of the building, where the robot drove
+std::vector<CellIndex> groundOutside() {
+  std::vector<CellIndex> cells;
+  for (int x = 0; x < 50; ++x) {
+    for (int y = 0; y < 40; ++y) {
+      if (x < 10 || y < 10) cells.emplace_back(x, y);
+    }
+  }
+  return cells;
+}
+
+TEST(FootprintCompletionTest, TwoWallsOfACornerGiveTheRectangleAndItsRoof) {
+  Scene s(southAndWestWalls(), 49, groundOutside());
+  const auto footprints = completeFootprints(s.mesh, s.map, FootprintConfig{});
+  ASSERT_EQ(footprints.size(), 1u);
+  const Footprint& f = footprints[0];
+  EXPECT_FLOAT_EQ(f.roof_height, 10.0f);
+  EXPECT_EQ(f.wall_vertices, 49);
+  EXPECT_EQ(f.raised_vertices, 49);
+  // the corners, in any rotation of the counter-clockwise order: (2,2) (8,2) (8,6) (2,6)
+  std::map<std::pair<long, long>, int> corners;
+  for (const auto& c : f.corners) ++corners[{std::lround(c.x() * 1000), std::lround(c.y() * 1000)}];
+  for (const auto& [x, y] : {std::pair{2000L, 2000L}, {8000L, 2000L}, {8000L, 6000L}, {2000L, 6000L}}) {
+    EXPECT_EQ((corners[{x, y}]), 1) << x << " " << y;
+  }
+  const Eigen::Vector2d e1 = f.corners[1] - f.corners[0], e2 = f.corners[2] - f.corners[1];
+  EXPECT_GT(e1.x() * e2.y() - e1.y() * e2.x(), 0.0);  // counter-clockwise
+  // the roof: every cell inside without a vertex of its own, columns 11-39 by rows 11-29
+  const auto roof = roofCells(footprints, s.mesh, 0.2);
+  EXPECT_EQ(roof.size(), 29u * 19u);
+  for (const auto& r : roof) {
+    EXPECT_FLOAT_EQ(r.height, 10.0f);
+    EXPECT_TRUE(r.cell.x() >= 11 && r.cell.x() <= 39 && r.cell.y() >= 11 && r.cell.y() <= 29) << r.cell.transpose();
+  }
+  // sorted by row, then column
+  EXPECT_EQ(roof.front().cell, CellIndex(11, 11));
+  EXPECT_EQ(roof.back().cell, CellIndex(39, 29));
+}
+
+TEST(FootprintCompletionTest, WallsWithoutEstimatesTakeTheRoofHeight) {
+  // 40 of the 49 wall vertices have a 10 m estimate; the other 9 take the roof, ground stays
+  Scene s(southAndWestWalls(), 40, groundOutside());
+  const auto footprints = completeFootprints(s.mesh, s.map, FootprintConfig{});
+  ASSERT_EQ(footprints.size(), 1u);
+  EXPECT_EQ(footprints[0].raised_vertices, 40);
+  EXPECT_EQ(roofWalls(s.mesh, s.map, footprints), 9);
+  const auto& v = s.mesh.vertices();
+  for (std::size_t i = 0; i < 49; ++i) EXPECT_FLOAT_EQ(v[i].height(), 10.0f) << i;
+  for (std::size_t i = 49; i < v.size(); ++i) EXPECT_FALSE(v[i].raised()) << i;
+  EXPECT_TRUE(v[45].spread);
+  EXPECT_FALSE(v[5].spread);
+}
+
+TEST(FootprintCompletionTest, AStraightWallAloneGivesNoFootprint) {
+  Scene s(southWall(), 30, groundOutside());
+  EXPECT_TRUE(completeFootprints(s.mesh, s.map, FootprintConfig{}).empty());
+}
+
+TEST(FootprintCompletionTest, SomethingSensedInsideRejectsTheRectangle) {
+  // a patch of 5 x 4 ground cells in the middle: 20 of about 375 inner cells (more than 2 %)
+  std::vector<CellIndex> ground = groundOutside();
+  for (int x = 20; x < 25; ++x) {
+    for (int y = 18; y < 22; ++y) ground.emplace_back(x, y);
+  }
+  Scene s(southAndWestWalls(), 49, ground);
+  EXPECT_TRUE(completeFootprints(s.mesh, s.map, FootprintConfig{}).empty());
+  // one sensed cell inside is within the allowance
+  std::vector<CellIndex> one = groundOutside();
+  one.emplace_back(20, 20);
+  Scene t(southAndWestWalls(), 49, one);
+  EXPECT_EQ(completeFootprints(t.mesh, t.map, FootprintConfig{}).size(), 1u);
+}
+
+TEST(FootprintCompletionTest, NeedsEnoughRaisedWallsAndCanBeTurnedOff) {
+  Scene few(southAndWestWalls(), 4, groundOutside());
+  EXPECT_TRUE(completeFootprints(few.mesh, few.map, FootprintConfig{}).empty());
+  Scene s(southAndWestWalls(), 49, groundOutside());
+  FootprintConfig off;
+  off.enabled = false;
+  EXPECT_TRUE(completeFootprints(s.mesh, s.map, off).empty());
+}
+
+TEST(FootprintCompletionTest, ARotatedCornerGivesARotatedRectangle) {
+  // walls 6 m and 4 m long from (10, 10) m along 30 degrees and 120 degrees, rasterised into cells
+  const double angle = 30 * M_PI / 180;
+  const Eigen::Vector2d o(10, 10), u(std::cos(angle), std::sin(angle)), v(-std::sin(angle), std::cos(angle));
+  std::vector<CellIndex> walls;
+  auto addCell = [&](const Eigen::Vector2d& p) {
+    const CellIndex c(static_cast<int>(std::floor(p.x() / 0.2)), static_cast<int>(std::floor(p.y() / 0.2)));
+    if (std::find(walls.begin(), walls.end(), c) == walls.end()) walls.push_back(c);
+  };
+  for (double t = 0; t <= 6.0; t += 0.05) addCell(o + t * u);
+  for (double t = 0; t <= 4.0; t += 0.05) addCell(o + t * v);
+  Scene s(walls, walls.size(), {});
+  const auto footprints = completeFootprints(s.mesh, s.map, FootprintConfig{});
+  ASSERT_EQ(footprints.size(), 1u);
+  // the true corners, each matched by one within a cell's diagonal and a half
+  const std::array<Eigen::Vector2d, 4> truth = {o, o + 6 * u, o + 6 * u + 4 * v, o + 4 * v};
+  for (const auto& t : truth) {
+    double nearest = 1e9;
+    for (const auto& c : footprints[0].corners) nearest = std::min(nearest, (c - t).norm());
+    EXPECT_LT(nearest, 0.45) << t.transpose();
+  }
+  // and a roof of the 24 m2 less the wall cells (about 3 m2), give or take the half-cell margins
+  const double area = roofCells(footprints, s.mesh, 0.2).size() * 0.04;
+  EXPECT_GT(area, 19.0);
+  EXPECT_LT(area, 25.0);
+}
+
+TEST(TerrainMeshTest, AQuadMissingItsLowerLeftCornerStillGetsATriangle) {
+  // cells (1,0) (0,1) (1,1): one triangle, counter-clockwise from above
+  const std::vector<CellIndex> cells = {CellIndex(1, 0), CellIndex(0, 1), CellIndex(1, 1)};
+  const auto tris = gridTriangles(cells, [&](const CellIndex& c) -> std::int64_t {
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (cells[i] == c) return static_cast<std::int64_t>(i);
+    }
+    return -1;
+  });
+  ASSERT_EQ(tris.size(), 1u);
+  const Eigen::Vector2i a = cells[tris[0][0]], b = cells[tris[0][1]], c = cells[tris[0][2]];
+  EXPECT_GT((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x(), 0);
+}
+
+}  // namespace
+}  // namespace terrain
