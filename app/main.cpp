@@ -85,7 +85,7 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
 void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_file, std::string& histogram,
                         std::string& solver) {
   cmd.add_option("--config", config_file, "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
-                                          "estimation, footprint); command-line options override it");
+                                          "estimation, footprint, crown); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
   cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
       ->capture_default_str();
@@ -109,6 +109,8 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_flag("--footprints,!--no-footprints", c.footprint.enabled,
                "complete building footprints from two walls of a corner and roof them at the walls' recovered height "
                "(default: on)");
+  cmd.add_flag("--crowns,!--no-crowns", c.crown.enabled,
+               "raise the ground under tree crowns measured against the sky above sensed trunks (default: off)");
   cmd.add_option("--spread-distance", c.estimation.spread_distance,
                  "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();
@@ -166,6 +168,9 @@ void printScorecard(const nlohmann::json& r) {
               << f["roof_cells"].get<std::size_t>() << " (" << f["object_cells"].get<std::size_t>() << " over objects, MAE "
               << f["on_objects"]["mae_m"].get<double>() << " m; " << f["wrongly_filled_cells"].get<std::size_t>()
               << " over terrain)\n";
+  }
+  if (h.contains("crown_ground_vertices")) {
+    std::cout << "    ground vertices raised under tree crowns: " << h["crown_ground_vertices"].get<std::size_t>() << "\n";
   }
   if (r["height_baselines"].contains("inpainting")) {
     const auto& b = r["height_baselines"];

@@ -70,6 +70,14 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"footprint.min_side_support", num(c.footprint.min_side_support)},
       {"footprint.max_inside_share", num(c.footprint.max_inside_share)},
       {"footprint.min_raised", integer(c.footprint.min_raised)},
+      {"crown.enabled", [&c](const YAML::Node& n) { c.crown.enabled = n.as<bool>(); }},
+      {"crown.max_trunk_width", num(c.crown.max_trunk_width)},
+      {"crown.min_radius", num(c.crown.min_radius)},
+      {"crown.max_radius", num(c.crown.max_radius)},
+      {"crown.min_samples", integer(c.crown.min_samples)},
+      {"crown.max_top_spread", num(c.crown.max_top_spread)},
+      {"crown.min_height_px", integer(c.crown.min_height_px)},
+      {"crown.min_baseline", num(c.crown.min_baseline)},
   };
 }
 
@@ -111,12 +119,20 @@ void validate(const PipelineConfig& c) {
     require(share >= 0 && share <= 1, name, share, "[0, 1]");
   }
   require(c.footprint.min_raised >= 1, "footprint.min_raised", c.footprint.min_raised, ">= 1");
+  require(c.crown.max_trunk_width > 0 && c.crown.max_trunk_width <= 10, "crown.max_trunk_width", c.crown.max_trunk_width, "(0, 10] m");
+  require(c.crown.min_radius >= 0 && c.crown.min_radius <= c.crown.max_radius, "crown.min_radius", c.crown.min_radius,
+          "[0, crown.max_radius] m");
+  require(c.crown.max_radius > 0 && c.crown.max_radius <= 50, "crown.max_radius", c.crown.max_radius, "(0, 50] m");
+  require(c.crown.min_samples >= 1, "crown.min_samples", c.crown.min_samples, ">= 1");
+  require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
+  require(c.crown.min_height_px >= 1, "crown.min_height_px", c.crown.min_height_px, ">= 1 px");
+  require(c.crown.min_baseline >= 0, "crown.min_baseline", c.crown.min_baseline, ">= 0 m");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
           c.estimation.fusion_quantile, "[0, 1]");
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint");
+  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown");
 }
 
 std::string pipelineConfigToJson(const PipelineConfig& c) {
@@ -144,6 +160,10 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                     {"wall_tolerance", c.footprint.wall_tolerance}, {"min_wall_share", c.footprint.min_wall_share},
                     {"min_side_support", c.footprint.min_side_support}, {"max_inside_share", c.footprint.max_inside_share},
                     {"min_raised", c.footprint.min_raised}};
+  j["crown"] = {{"enabled", c.crown.enabled}, {"max_trunk_width", c.crown.max_trunk_width},
+                {"min_radius", c.crown.min_radius}, {"max_radius", c.crown.max_radius},
+                {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
+                {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline}};
   return j.dump();
 }
 

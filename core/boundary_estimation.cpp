@@ -20,8 +20,8 @@ bool skyAbove(const cv::Mat& rgb, int u, int top, const BoundaryEstimationConfig
     r += p[0], g += p[1], b += p[2], ++n;
   }
   if (n == 0) return false;
-  r /= n, g /= n, b /= n;
-  return b >= r + cfg.sky_blue_margin && b >= g && (r + g + b) / 3 >= cfg.sky_min_brightness;
+  const cv::Vec3b mean(static_cast<std::uint8_t>(r / n), static_cast<std::uint8_t>(g / n), static_cast<std::uint8_t>(b / n));
+  return looksLikeSky(mean, cfg.sky_blue_margin, cfg.sky_min_brightness);
 }
 
 bool nonGround(const MeshVertex& m, const VoxelMap& map) {
@@ -80,6 +80,11 @@ class ObjectGrid {
 };
 
 }  // namespace
+
+bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
+  const int r = c[0], g = c[1], b = c[2];
+  return b >= r + blue_margin && b >= g && (r + g + b) / 3 >= min_brightness;
+}
 
 MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map) {
   const auto& vertices = mesh.vertices();
@@ -179,6 +184,7 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     }
     mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
     ++stats.estimated;
+    stats.estimated_vertices.push_back(i);
   }
   return stats;
 }

@@ -10,6 +10,8 @@
 #include "core/terrain_mesh.hpp"
 #include "core/voxel_map.hpp"
 
+#include <opencv2/core/matx.hpp>
+
 namespace terrain {
 
 struct BoundaryEstimationConfig {
@@ -43,6 +45,10 @@ struct BoundaryEstimationConfig {
   double spread_distance = 0.0;  // [m]
 };
 
+// The sky test's colour rule for one RGB colour: daylight sky is blue at least blue_margin grey
+// levels above red and not below green, with a mean brightness of at least min_brightness.
+bool looksLikeSky(const cv::Vec3b& rgb, int blue_margin, int min_brightness);
+
 // The objects the lidar saw: 8-connected groups of mesh vertices whose top voxel is non-ground,
 // numbered in the order of their lowest vertex id.
 struct MeshObjects {
@@ -60,6 +66,7 @@ struct BoundaryEstimationStats {
   int estimated = 0;  // of which received a height estimate
   int no_sky = 0;     // of which were skipped: no sky above their top boundary
   int not_clear = 0;  // of which were skipped: another object in their column (clear_line)
+  std::vector<std::uint32_t> estimated_vertices;  // the ids of the vertices that received an estimate
 };
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.

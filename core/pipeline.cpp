@@ -88,6 +88,7 @@ void Pipeline::finish() {
   }
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
+  crowns_.apply(mesh_, map_, config_.crown);
   for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
   if (!map_.voxels().empty()) {
     std::size_t ground = 0;
@@ -190,6 +191,8 @@ void Pipeline::processReady(const SensorFrame& frame) {
                                                              world_from_camera, config_.estimation, frame.image->rgb);
     rec.estimated_vertices = stats.estimated;
     if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
+    crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, stats.estimated_vertices,
+                    config_.crown, config_.estimation);
     rec.estimation_ms = msSince(t);
   }
   rec.total_ms = msSince(start);

@@ -5,6 +5,7 @@
 
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
+#include "core/crown_completion.hpp"
 #include "core/footprint_completion.hpp"
 #include "core/ground_segmentation.hpp"
 #include "core/pose_estimation.hpp"
@@ -25,6 +26,7 @@ struct PipelineConfig {
   BoundaryDetectionConfig boundary;
   BoundaryEstimationConfig estimation;
   FootprintConfig footprint;
+  CrownConfig crown;
   int segment_every = 1;  // run ground segmentation every this many frames (and at the end)
 };
 
@@ -83,6 +85,7 @@ class Pipeline {
   SegmentationResult segmentation_;          // of the whole map, from finish()
   std::vector<Footprint> footprints_;        // from finish()
   std::vector<RoofCell> roof_cells_;
+  CrownSampler crowns_;                      // crown samples, frame by frame
   IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {
     SensorFrame frame;

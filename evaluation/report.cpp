@@ -182,6 +182,10 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
                       {"building_cells", roof.building_cells},
                       {"wrongly_filled_cells", roof.wrongly_filled},
                       {"on_objects", errorJson(roof.on_objects)}};
+  // ground vertices raised under tree crowns (crown completion)
+  std::size_t under_crowns = 0;
+  for (const auto& m : pipeline.mesh().vertices()) under_crowns += m.raised() && map.voxels()[m.top_voxel].label == VoxelLabel::Ground;
+  hr["crown_ground_vertices"] = under_crowns;
   json& list = hr["footprints"]["list"] = json::array();
   for (const auto& f : pipeline.footprints()) {
     json corners = json::array();

@@ -1,0 +1,149 @@
+#include "core/crown_completion.hpp"
+
+#include "core/camera_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace terrain {
+
+namespace {
+
+// A trunk-sized object: where it stands and how high the lidar saw it.
+struct Trunk {
+  std::uint32_t key = 0;   // its lowest vertex id
+  std::int32_t object = -1;
+  Eigen::Vector2d centre;  // [m] mean of its cell centres
+  double top = 0;          // [m] highest sensed height
+};
+
+std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects, double max_width) {
+  const auto& vertices = mesh.vertices();
+  const double cell = map.voxelSize();
+  struct Extent {
+    int n = 0, x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+    std::uint32_t first = 0;
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    double top = -1e300;
+  };
+  std::vector<Extent> extents(objects.count);
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    const std::int32_t o = objects.of[i];
+    if (o < 0) continue;
+    Extent& e = extents[o];
+    const CellIndex c = vertices[i].cell;
+    if (e.n == 0) e.first = i, e.x0 = e.x1 = c.x(), e.y0 = e.y1 = c.y();
+    e.x0 = std::min(e.x0, c.x()), e.x1 = std::max(e.x1, c.x()), e.y0 = std::min(e.y0, c.y()), e.y1 = std::max(e.y1, c.y());
+    e.sum += Eigen::Vector2d((c.x() + 0.5) * cell, (c.y() + 0.5) * cell);
+    e.top = std::max(e.top, static_cast<double>(vertices[i].sensed_height));
+    ++e.n;
+  }
+  std::vector<Trunk> trunks;
+  for (std::int32_t o = 0; o < objects.count; ++o) {
+    const Extent& e = extents[o];
+    if (e.n == 0 || (e.x1 - e.x0 + 1) * cell > max_width || (e.y1 - e.y0 + 1) * cell > max_width) continue;
+    trunks.push_back({e.first, o, e.sum / e.n, e.top});
+  }
+  return trunks;
+}
+
+}  // namespace
+
+int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& k,
+                          const Pose& world_from_camera, const std::vector<std::uint32_t>& estimated_vertices,
+                          const CrownConfig& cfg, const BoundaryEstimationConfig& sky_cfg) {
+  if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty() || estimated_vertices.empty()) return 0;
+  const MeshObjects objects = findMeshObjects(mesh, map);
+  // the objects with an estimate in this frame
+  std::vector<std::uint8_t> clear(objects.count, 0);
+  for (std::uint32_t i : estimated_vertices) {
+    if (i < objects.of.size() && objects.of[i] >= 0) clear[objects.of[i]] = 1;
+  }
+  const Pose camera_from_world = world_from_camera.inverse();
+  const Point3 centre = world_from_camera.translation();
+  auto sky = [&](int u, int row) {
+    return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);
+  };
+  int measured = 0;
+  for (const Trunk& t : findTrunks(mesh, map, objects, cfg.max_trunk_width)) {
+    if (!clear[t.object]) continue;
+    const Point3 camera_point = camera_from_world * Point3(t.centre.x(), t.centre.y(), t.top);
+    const auto px = project(k, camera_point);
+    if (!px) continue;
+    const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
+    if (u >= rgb.cols || v >= rgb.rows) continue;
+    // up the column while not sky: the crown's top is the last non-sky row
+    int top = v;
+    while (top - 1 >= 0 && !sky(u, top - 1)) --top;
+    if (top == 0 || v - top < cfg.min_height_px) continue;  // cut off by the image top, or nothing above
+    // the widest non-sky run around the column, row by row down from the top, while sky bounds it
+    // on both sides and neither end jumps outwards (something behind joining the crown)
+    int widest = 0, prev_left = u, prev_right = u;
+    for (int row = top; row < v; ++row) {
+      int left = u, right = u;
+      while (left - 1 >= 0 && !sky(left - 1, row)) --left;
+      while (right + 1 < rgb.cols && !sky(right + 1, row)) ++right;
+      if (left == 0 || right == rgb.cols - 1) break;
+      const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
+      if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
+      widest = std::max(widest, right - left + 1);
+      prev_left = left, prev_right = right;
+    }
+    if (widest == 0) continue;
+    const double radius = 0.5 * widest * camera_point.z() / k.fx;
+    const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
+    const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
+    if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) continue;
+    samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
+    ++measured;
+  }
+  return measured;
+}
+
+int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg) const {
+  if (!cfg.enabled || samples_.empty() || mesh.vertices().empty()) return 0;
+  const MeshObjects objects = findMeshObjects(mesh, map);
+  auto& vertices = mesh.vertices();
+  const double cell = map.voxelSize();
+  int raised = 0;
+  for (const Trunk& t : findTrunks(mesh, map, objects, cfg.max_trunk_width)) {
+    const auto it = samples_.find(t.key);
+    if (it == samples_.end() || static_cast<int>(it->second.size()) < std::max(1, cfg.min_samples)) continue;
+    // seen from far enough apart
+    double baseline = 0;
+    for (const Sample& a : it->second) baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
+    if (baseline < cfg.min_baseline) continue;
+    // the top: the median sample, if the samples agree (a taller crown behind the column in some
+    // frames moves with parallax); the radius: the lower quartile (a run widened by a crown beside
+    // it errs only upwards)
+    std::vector<float> tops, radii;
+    for (const Sample& s : it->second) tops.push_back(s.top), radii.push_back(s.radius);
+    std::sort(tops.begin(), tops.end());
+    std::sort(radii.begin(), radii.end());
+    const double top = tops[tops.size() / 2], r = radii[radii.size() / 4];
+    if (tops[tops.size() * 3 / 4] - tops[tops.size() / 4] > cfg.max_top_spread * top) continue;
+    if (r < cfg.min_radius) continue;
+    // the ground vertices (and the trunk's own) within the radius: a spherical cap topped at `top`
+    const int reach = static_cast<int>(std::ceil(r / cell));
+    const CellIndex c0(static_cast<int>(std::floor(t.centre.x() / cell)), static_cast<int>(std::floor(t.centre.y() / cell)));
+    for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const std::int64_t j = mesh.find(c0 + CellIndex(dx, dy));
+        if (j < 0 || (objects.of[j] >= 0 && objects.of[j] != t.object)) continue;
+        MeshVertex& m = vertices[j];
+        if (!m.estimates.empty()) continue;  // its own estimates stand
+        const Eigen::Vector2d p((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell);
+        const double d2 = (p - t.centre).squaredNorm();
+        if (d2 > r * r) continue;
+        const float h = static_cast<float>(top - r + std::sqrt(r * r - d2));
+        if (h <= m.sensed_height || (m.spread && m.recovered_height >= h)) continue;
+        if (!m.spread) ++raised;
+        m.spread = true;
+        m.recovered_height = h;
+      }
+    }
+  }
+  return raised;
+}
+
+}  // namespace terrain

@@ -1,0 +1,70 @@
+#pragma once
+// Stage 6c, crown completion (beyond the paper): with the lidar capped a little above the sensor, a
+// tree is a trunk; the ground under its crown is sensed and labelled ground, so boundary estimation,
+// which raises non-ground vertices, never reaches the crown. Each frame, every trunk-sized object
+// the camera sees is followed up its image column while the pixels are not sky: the last non-sky
+// pixel is the crown's top (taken only in frames where boundary estimation gave the trunk an estimate:
+// its column passed the clear-line and sky tests), and the widest row of the non-sky run around the column, where sky
+// bounds it on both sides, is the crown's width at the trunk's depth. Only crowns against the sky
+// are measured: where a building or another crown stands behind, the run does not end in sky (or
+// jumps outwards) and the frame gives no sample. At the end of the run, a tree with enough samples
+// raises the ground vertices within its crown radius to a spherical cap of that radius whose top
+// is the crown's top height (the median of the samples).
+
+#include "core/boundary_estimation.hpp"
+#include "core/sensor_data.hpp"
+#include "core/terrain_mesh.hpp"
+#include "core/voxel_map.hpp"
+
+#include <opencv2/core/mat.hpp>
+
+#include <unordered_map>
+#include <vector>
+
+namespace terrain {
+
+struct CrownConfig {
+  // Off by default: where a taller crown stands behind the trunk's column in every view, the top
+  // and radius measured are that crown's. On 60 frames (forest seed 1, urban seed 2) the error over
+  // the tree cells the camera saw changed by +0.02 and -0.09 m while 27 and 25 more terrain cells
+  // were raised; on 8 frames of forest, before min_baseline, 322 more.
+  bool enabled = false;
+  double max_trunk_width = 1.2;  // [m] objects wider than this (either way) are not trunks
+  double min_radius = 0.6;       // [m] a narrower top is a pole's, not a crown
+  double max_radius = 8.0;       // [m] wider runs are not one crown
+  int min_samples = 3;           // frames that must have measured a crown
+  double max_top_spread = 0.1;   // interquartile range of the crown top samples, share of their median
+  double min_baseline = 4.0;     // [m] the samples' camera positions must spread this far: a crown
+                                 // behind the column moves against the trunk only with parallax
+  int min_height_px = 3;         // [px] non-sky rows needed above the trunk's top
+};
+
+// The crown samples of the trunks, gathered frame by frame.
+class CrownSampler {
+ public:
+  // One frame: rgb (CV_8UC3, RGB), the camera pose at the image time, and the vertices boundary
+  // estimation gave an estimate in this frame: a trunk is measured only if one of its vertices is
+  // among them, so that its column passed the clear-line and sky tests (no other sensed object may
+  // own the top). Sky is judged with the sky test of boundary estimation (its sky_blue_margin and
+  // sky_min_brightness). Returns the number of crowns measured.
+  int measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& intrinsics,
+              const Pose& world_from_camera, const std::vector<std::uint32_t>& estimated_vertices,
+              const CrownConfig& config, const BoundaryEstimationConfig& sky);
+
+  // At the end of the run: raises the ground vertices under each trunk with min_samples samples
+  // (MeshVertex::spread, as spreadEstimates does). Returns the number of vertices raised.
+  int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config) const;
+
+  // trunks with samples
+  std::size_t trunks() const { return samples_.size(); }
+
+ private:
+  struct Sample {
+    float top = 0;     // [m] crown top height
+    float radius = 0;  // [m]
+    Eigen::Vector2f camera;  // [m] where the camera was (x, y)
+  };
+  std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id
+};
+
+}  // namespace terrain

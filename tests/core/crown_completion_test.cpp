@@ -1,0 +1,125 @@
+#include "core/camera_model.hpp"
+#include "core/crown_completion.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+namespace terrain {
+namespace {
+
+// a level camera 1.6 m above the origin looking north (+y)
+Pose northCamera() {
+  Pose world_from_camera = Pose::Identity();
+  world_from_camera.linear().col(0) = Vector3(1, 0, 0);
+  world_from_camera.linear().col(1) = Vector3(0, 0, -1);
+  world_from_camera.linear().col(2) = Vector3(0, 1, 0);
+  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  return world_from_camera;
+}
+
+// A tree 20 m north of the camera: the lidar saw its trunk (one cell centred at (0.1, 20.1), sensed
+// up to 3 m) and the ground around it (0 m, out to 5 m); its crown is a sphere of radius 3 m centred
+// 8 m up, above the lidar's reach.
+struct Tree {
+  VoxelMap map{VoxelMapConfig{0.2}};
+  TerrainMesh mesh;
+  CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  Pose pose = northCamera();
+  Tree() {
+    std::vector<Voxel> voxels;
+    std::vector<MeshVertex> vertices;
+    for (int x = -25; x <= 25; ++x) {
+      for (int y = 75; y <= 125; ++y) {
+        const bool trunk = x == 0 && y == 100;
+        if (!trunk && std::hypot(x * 0.2, (y - 100) * 0.2) > 5.0) continue;
+        Voxel v;
+        v.height = trunk ? 3.0f : 0.0f;
+        v.index = VoxelIndex(x, y, trunk ? 15 : 0);
+        v.label = trunk ? VoxelLabel::NonGround : VoxelLabel::Ground;
+        MeshVertex m;
+        m.cell = CellIndex(x, y);
+        m.top_voxel = static_cast<std::uint32_t>(voxels.size());
+        m.sensed_height = v.height;
+        if (trunk) trunk_vertex = m.top_voxel;
+        voxels.push_back(v);
+        vertices.push_back(m);
+      }
+    }
+    EXPECT_TRUE(map.restore(voxels));
+    EXPECT_TRUE(mesh.restore(vertices));
+  }
+  // sky above, ground below the horizon, the trunk and the crown's silhouette (a disc of the
+  // sphere's angular radius); crown_shift moves the crown up in the image [px]
+  cv::Mat image(int crown_shift = 0) const {
+    cv::Mat rgb(k.height, k.width, CV_8UC3, cv::Scalar(120, 170, 235));
+    const Pose camera_from_world = pose.inverse();
+    const int horizon = static_cast<int>(k.cy);
+    cv::rectangle(rgb, cv::Rect(0, horizon, k.width, k.height - horizon), cv::Scalar(90, 110, 60), cv::FILLED);
+    const auto base = project(k, camera_from_world * Point3(0.1, 20.1, 0.0));
+    const auto centre = project(k, camera_from_world * Point3(0.1, 20.1, 8.0));
+    const double radius_px = k.fx * std::asin(3.0 / 20.0);
+    cv::rectangle(rgb, cv::Point(static_cast<int>(base->x()) - 2, static_cast<int>(centre->y()) - crown_shift),
+                  cv::Point(static_cast<int>(base->x()) + 2, static_cast<int>(base->y())), cv::Scalar(90, 60, 30), cv::FILLED);
+    cv::circle(rgb, cv::Point(static_cast<int>(std::lround(centre->x())), static_cast<int>(std::lround(centre->y())) - crown_shift),
+               static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
+    return rgb;
+  }
+  std::uint32_t trunk_vertex = 0;
+};
+
+TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalCap) {
+  Tree tree;
+  CrownSampler sampler;
+  const cv::Mat rgb = tree.image();
+  CrownConfig cfg;
+  cfg.enabled = true;
+  // off (the default): nothing measured
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, {tree.trunk_vertex}, CrownConfig{},
+                            BoundaryEstimationConfig{}),
+            0);
+  for (int frame = 0; frame < 3; ++frame) {
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, {tree.trunk_vertex}, cfg, BoundaryEstimationConfig{}), 1);
+  }
+  EXPECT_EQ(sampler.trunks(), 1u);
+  // seen from one spot only: a crown behind the column could not have shown itself, nothing raised
+  EXPECT_EQ(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  // (the same image stands for views along a baseline here)
+  cfg.min_baseline = 0;
+  EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  // the crown's top is 11 m and its radius 3 m, to within a pixel at 20 m (about 0.05 m) and the
+  // rasterised silhouette
+  const auto& v = tree.mesh.vertices();
+  auto at = [&](int x, int y) -> const MeshVertex& { return v[tree.mesh.find(CellIndex(x, y))]; };
+  EXPECT_NEAR(at(1, 100).height(), 11.0, 0.15);
+  // 2 m from the trunk: 11 - 3 + sqrt(9 - 4)
+  EXPECT_NEAR(at(10, 100).height(), 8.0 + std::sqrt(5.0), 0.2);
+  // beyond 3.2 m the ground stays ground
+  EXPECT_FALSE(at(17, 100).raised());
+  EXPECT_FALSE(at(0, 117).raised());
+  // the trunk, without an estimate of its own, is under the crown too
+  EXPECT_NEAR(at(0, 100).height(), 11.0, 0.15);
+}
+
+TEST(CrownCompletionTest, NoSampleWithoutAClearEstimateOrWithTheCrownCutOff) {
+  Tree tree;
+  CrownSampler sampler;
+  CrownConfig cfg;
+  cfg.enabled = true;
+  cfg.min_baseline = 0;
+  // boundary estimation gave the trunk no estimate in this frame: its column may be another's
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, {}, cfg, BoundaryEstimationConfig{}), 0);
+  // the crown runs off the image top: its top is unknown
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(400), tree.k, tree.pose, {tree.trunk_vertex}, cfg,
+                            BoundaryEstimationConfig{}),
+            0);
+  EXPECT_EQ(sampler.trunks(), 0u);
+  // too few samples: nothing raised
+  CrownSampler once;
+  EXPECT_EQ(once.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, {tree.trunk_vertex}, cfg, BoundaryEstimationConfig{}), 1);
+  EXPECT_EQ(once.apply(tree.mesh, tree.map, cfg), 0);
+}
+
+}  // namespace
+}  // namespace terrain
