@@ -131,6 +131,11 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   row("after boundary estimation", hr["after"]);
   row("estimated cells, sensed only", hr["estimated_cells"]["before"]);
   row("estimated cells, after", hr["estimated_cells"]["after"]);
+  if (hr.contains("footprints")) {
+    row("roofs of " + std::to_string(hr["footprints"]["completed"].get<std::size_t>()) + " completed footprints (" +
+            std::to_string(hr["footprints"]["wrongly_filled_cells"].get<std::size_t>()) + " more cells over terrain)",
+        hr["footprints"]["on_objects"]);
+  }
   if (hr.contains("by_camera_view")) {
     for (auto it = hr["by_camera_view"].begin(); it != hr["by_camera_view"].end(); ++it) {
       std::string name = it.key();
@@ -170,6 +175,12 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       lo = std::min(lo, static_cast<double>(v.sensed_height));
       hi = std::max(hi, static_cast<double>(v.height()));
     }
+    for (const auto& roof : p.roofCells()) {
+      const int c = (roof.cell.x() - x0) / step, rr = rows - 1 - (roof.cell.y() - y0) / step;
+      if (c < 0 || rr < 0 || c >= cols || rr >= rows) continue;
+      after.at<float>(rr, c) = roof.height;
+      hi = std::max(hi, static_cast<double>(roof.height));
+    }
     for (int rr = 0; rr < rows; ++rr) {
       for (int c = 0; c < cols; ++c) {
         const double t = world.surfaceHeight((x0 + c * step + 0.5) * cell, (y0 + (rows - 1 - rr) * step + 0.5) * cell);
@@ -178,7 +189,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       }
     }
     h << "<h2>Height maps</h2>" << img(renderHeightMap(before, lo, hi, "sensed only"), "before")
-      << img(renderHeightMap(after, lo, hi, "after boundary estimation"), "after")
+      << img(renderHeightMap(after, lo, hi, "after boundary estimation and footprint completion"), "after")
       << img(renderHeightMap(truth_map, lo, hi, "truth"), "truth");
     std::vector<double> eb, ea;
     for (const auto& v : verts) {
@@ -202,8 +213,8 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   }
   h << "</table>";
   // boundary overlays: true top boundary green, recovered mesh projected red
-  h << "<h2>Boundaries on camera frames</h2><p>Green: true object top boundary; red: mesh vertices over objects at their "
-       "recovered height, projected with the true camera pose.</p>";
+  h << "<h2>Boundaries on camera frames</h2><p>Green: true object top boundary; red: raised mesh vertices at their "
+       "recovered height, orange: roof cells of completed footprints, projected with the true camera pose.</p>";
   for (const auto& c : truth.cameras) {
     cv::Mat bgr;
     cv::cvtColor(c.rgb, bgr, cv::COLOR_RGB2BGR);
@@ -221,6 +232,11 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       if (!m.raised()) continue;
       const auto px = project(p.calibration().camera, camera_from_world * Point3((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell, m.height()));
       if (px) cv::circle(bgr, {static_cast<int>(px->x()), static_cast<int>(px->y())}, 1, cv::Scalar(0, 0, 255), cv::FILLED);
+    }
+    for (const auto& roof : p.roofCells()) {
+      const auto px = project(p.calibration().camera,
+                              camera_from_world * Point3((roof.cell.x() + 0.5) * cell, (roof.cell.y() + 0.5) * cell, roof.height));
+      if (px) bgr.at<cv::Vec3b>(static_cast<int>(px->y()), static_cast<int>(px->x())) = cv::Vec3b(0, 140, 255);
     }
     h << img(bgr, "frame " + std::to_string(c.frame));
   }
