@@ -70,6 +70,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"footprint.min_side_support", num(c.footprint.min_side_support)},
       {"footprint.max_inside_share", num(c.footprint.max_inside_share)},
       {"footprint.min_raised", integer(c.footprint.min_raised)},
+      {"footprint.min_raised_share", num(c.footprint.min_raised_share)},
       {"crown.enabled", [&c](const YAML::Node& n) { c.crown.enabled = n.as<bool>(); }},
       {"crown.max_trunk_width", num(c.crown.max_trunk_width)},
       {"crown.min_radius", num(c.crown.min_radius)},
@@ -115,7 +116,8 @@ void validate(const PipelineConfig& c) {
           "[0, 10] m");
   for (const auto& [name, share] : {std::pair{"footprint.min_wall_share", c.footprint.min_wall_share},
                                     {"footprint.min_side_support", c.footprint.min_side_support},
-                                    {"footprint.max_inside_share", c.footprint.max_inside_share}}) {
+                                    {"footprint.max_inside_share", c.footprint.max_inside_share},
+                                    {"footprint.min_raised_share", c.footprint.min_raised_share}}) {
     require(share >= 0 && share <= 1, name, share, "[0, 1]");
   }
   require(c.footprint.min_raised >= 1, "footprint.min_raised", c.footprint.min_raised, ">= 1");
@@ -159,7 +161,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
                     {"wall_tolerance", c.footprint.wall_tolerance}, {"min_wall_share", c.footprint.min_wall_share},
                     {"min_side_support", c.footprint.min_side_support}, {"max_inside_share", c.footprint.max_inside_share},
-                    {"min_raised", c.footprint.min_raised}};
+                    {"min_raised", c.footprint.min_raised}, {"min_raised_share", c.footprint.min_raised_share}};
   j["crown"] = {{"enabled", c.crown.enabled}, {"max_trunk_width", c.crown.max_trunk_width},
                 {"min_radius", c.crown.min_radius}, {"max_radius", c.crown.max_radius},
                 {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},

@@ -127,7 +127,10 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
     for (std::uint32_t i : ids) {
       if (!vertices[i].estimates.empty()) raised.push_back(vertices[i].recovered_height);
     }
-    if (static_cast<int>(raised.size()) < std::max(1, cfg.min_raised)) continue;
+    if (static_cast<int>(raised.size()) < std::max(1, cfg.min_raised) ||
+        static_cast<double>(raised.size()) < cfg.min_raised_share * static_cast<double>(ids.size())) {
+      continue;
+    }
     // the rectangle around the object's cells (grown by half a cell to their outer faces) that puts
     // most of them on its outline, among the orientations of the cells' convex hull edges; the
     // smallest-area one alone is ambiguous for an L of walls (flush with a leg or with the diagonal)

@@ -20,11 +20,17 @@ namespace terrain {
 struct FootprintConfig {
   bool enabled = true;
   double min_side = 2.0;           // [m] a footprint narrower than this is not completed
-  double wall_tolerance = 0.5;     // [m] an object's cell this close to the rectangle's outline is on it
+  // [m] an object's cell this close to the rectangle's outline is on it. Walls seen over a long drive
+  // thicken (a heading error of a few tenths of a degree shifts a wall 20 m away by 0.1 m): 1000
+  // frames of urban seed 1 completed 1 footprint at 0.5 m, 4 at 1.0 m and 8 at 1.5 m; on 60 frames
+  // (urban 1-3, flat, mixed, forest, slope, rough seed 1) 1.0 m completed 3 more on mixed (roof
+  // error 1.9 -> 1.0 m) and changed nothing else, while 1.5 m filled 542 cells of terrain on slope.
+  double wall_tolerance = 1.0;
   double min_wall_share = 0.95;    // share of the object's cells that must lie on the outline
   double min_side_support = 0.7;   // share of each of two adjacent sides that walls must cover
   double max_inside_share = 0.02;  // share of the cells inside that may be sensed (ground or another object)
   int min_raised = 5;              // wall vertices with their own height estimates needed for a roof height
+  double min_raised_share = 0.1;   // and their share of the object's vertices
 };
 
 // A completed footprint: a rectangle in the world's x-y plane and its roof height.

@@ -124,6 +124,12 @@ TEST(FootprintCompletionTest, SomethingSensedInsideRejectsTheRectangle) {
 TEST(FootprintCompletionTest, NeedsEnoughRaisedWallsAndCanBeTurnedOff) {
   Scene few(southAndWestWalls(), 4, groundOutside());
   EXPECT_TRUE(completeFootprints(few.mesh, few.map, FootprintConfig{}).empty());
+  // a share of the walls: 9 of 49 is under 20 %, 10 is over
+  FootprintConfig share;
+  share.min_raised_share = 0.2;
+  Scene nine(southAndWestWalls(), 9, groundOutside()), ten(southAndWestWalls(), 10, groundOutside());
+  EXPECT_TRUE(completeFootprints(nine.mesh, nine.map, share).empty());
+  EXPECT_EQ(completeFootprints(ten.mesh, ten.map, share).size(), 1u);
   Scene s(southAndWestWalls(), 49, groundOutside());
   FootprintConfig off;
   off.enabled = false;
