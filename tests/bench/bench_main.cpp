@@ -268,35 +268,64 @@ void BM_PacketDecode(benchmark::State& state) {
 }
 BENCHMARK(BM_PacketDecode)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// the whole pipeline in streaming mode, as 'terrain run' drives it: the simulated rig (lidar and a
-// 640x480 camera) on one thread feeding the pipeline on another through a bounded queue, over 40
-// frames of the urban scene; the figure is each frame's processing time (pose to height recovery)
-void BM_PipelineStreaming(benchmark::State& state) {
+// `frames` frames of the urban scene through the pipeline as 'terrain run' drives it: the simulated
+// rig on one thread feeding the pipeline on another through a bounded queue; the per-frame records
+std::vector<FrameRecord> streamUrban(int frames) {
   static const auto world = [] {
     urbanWorld();  // writes the scene
     return std::make_shared<const sim::World>(fs::temp_directory_path() / "terrain_bench" / "urban_1.xml");
   }();
+  sim::SimulatedRig rig(world, sim::SimConfig{}, frames);
+  Pipeline pipeline(rig.calibration(), PipelineConfig{});
+  app::BoundedQueue<SensorFrame> queue(4);
+  std::thread sensing([&] {
+    while (auto f = rig.next()) {
+      if (!queue.push(std::move(f->sensors))) break;
+    }
+    queue.close();
+  });
+  while (auto f = queue.pop()) pipeline.process(*f);
+  sensing.join();
+  pipeline.finish();
+  return pipeline.records();
+}
+
+// the whole pipeline in streaming mode over 40 frames of the urban scene (lidar and a 640x480
+// camera); the figure is each frame's processing time (pose to height recovery)
+void BM_PipelineStreaming(benchmark::State& state) {
   std::vector<double> frame_ms;
   for (auto _ : state) {
-    sim::SimulatedRig rig(world, sim::SimConfig{}, 40);
-    Pipeline pipeline(rig.calibration(), PipelineConfig{});
-    app::BoundedQueue<SensorFrame> queue(4);
-    std::thread sensing([&] {
-      while (auto f = rig.next()) {
-        if (!queue.push(std::move(f->sensors))) break;
-      }
-      queue.close();
-    });
-    while (auto f = queue.pop()) pipeline.process(*f);
-    sensing.join();
-    pipeline.finish();
-    for (const auto& r : pipeline.records()) frame_ms.push_back(r.total_ms);
+    for (const auto& r : streamUrban(40)) frame_ms.push_back(r.total_ms);
   }
   std::sort(frame_ms.begin(), frame_ms.end());
   state.counters["frame_median_ms"] = frame_ms[frame_ms.size() / 2];
   state.counters["frame_p95_ms"] = frame_ms[static_cast<std::size_t>(0.95 * (frame_ms.size() - 1))];
 }
 BENCHMARK(BM_PipelineStreaming)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+// memory over a long run, as 'terrain run --frames 1000' drives the pipeline (without the
+// evaluation's truth): the process's resident memory per voxel added after the first 100 frames, and
+// its growth over the last 300 frames, when the robot stands at the end of its path (reached near
+// frame 600) and only sensor noise adds a few voxels. Two to three minutes: scripts/bench runs it
+// with --long.
+void BM_LongRunMemory(benchmark::State& state) {
+  for (auto _ : state) {
+    const std::vector<FrameRecord> r = streamUrban(1000);
+    if (r.size() < 200 || r[99].resident_bytes == 0) {
+      state.SkipWithError("fewer than 200 frames, or resident memory unknown");
+      break;
+    }
+    const double added = static_cast<double>(r.back().voxels - r[99].voxels);
+    state.counters["bytes_per_added_voxel"] =
+        added > 0 ? (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[99].resident_bytes)) / added : 0.0;
+    // the last 300 frames
+    const std::size_t from = r.size() - 301;
+    state.counters["standing_growth_mb"] = (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[from].resident_bytes)) / 1e6;
+    state.counters["standing_new_voxels"] = static_cast<double>(r.back().voxels - r[from].voxels);
+    state.counters["voxels"] = static_cast<double>(r.back().voxels);
+  }
+}
+BENCHMARK(BM_LongRunMemory)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(1);
 
 // keeps the median of every benchmark for the summary table
 class Collector : public benchmark::ConsoleReporter {
@@ -360,6 +389,14 @@ int main(int argc, char** argv) {
     // the real sensor sends 20,833 firings/s, 6 a packet
     std::printf("%-44s %10.0f k/s %16s %11.1fx\n", "HDL-64E packets decoded into sweeps", perSecond(*r) / 1e3, ">= 3.5 k/s",
                 perSecond(*r) / (20833.3 / 6));
+  }
+  if (const auto* r = get("BM_LongRunMemory"); r && r->counters.count("voxels")) {
+    std::printf("%-44s %11.1f B %16s %12s\n", ("1000 frames: resident memory per added voxel (" +
+                std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels)").c_str(),
+                static_cast<double>(r->counters.at("bytes_per_added_voxel")), "", "");
+    std::printf("%-44s %11.2f MB %15s %12s\n", ("1000 frames: growth over the last 300, " +
+                std::to_string(static_cast<long>(r->counters.at("standing_new_voxels"))) + " new voxels").c_str(),
+                static_cast<double>(r->counters.at("standing_growth_mb")), "only with voxels", "");
   }
   if (const auto* r = get("BM_KittiScanSegmentation")) std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation", ms(*r), "<= 10 ms", "");
   return 0;
