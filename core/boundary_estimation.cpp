@@ -28,57 +28,6 @@ bool nonGround(const MeshVertex& m, const VoxelMap& map) {
   return map.voxels()[m.top_voxel].label == VoxelLabel::NonGround;
 }
 
-// Which object stands where, on a coarse grid: what else a skyline pixel could belong to.
-class ObjectGrid {
- public:
-  ObjectGrid(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects, double size) : size_(size) {
-    const auto& vertices = mesh.vertices();
-    if (vertices.empty()) return;
-    const double cell = map.voxelSize();
-    const auto [lo, hi] = mesh.cellBounds();
-    x0_ = lo.x() * cell, y0_ = lo.y() * cell;
-    nx_ = static_cast<int>((hi.x() - lo.x() + 1) * cell / size_) + 1;
-    ny_ = static_cast<int>((hi.y() - lo.y() + 1) * cell / size_) + 1;
-    cells_.assign(static_cast<std::size_t>(nx_) * ny_, kEmpty);
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-      if (objects.of[i] < 0) continue;
-      std::int32_t& c = cells_[index((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)];
-      c = (c == kEmpty || c == objects.of[i]) ? objects.of[i] : kMixed;
-    }
-  }
-  // Could the pixel whose ray (origin o, direction dir, world frame) is followed up to `range` metres
-  // horizontally belong to an object other than `own`? It could where the ray, outside the disc
-  // (centre, radius), passes over a cell of another object whose top (tops[object], +inf: unknown)
-  // is not clearly below the ray there.
-  bool otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
-                   double radius, const std::vector<double>& tops, double margin) const {
-    if (cells_.empty()) return false;
-    const double h = dir.head<2>().norm();
-    if (h < 1e-12) return false;
-    const int steps = static_cast<int>(range / (0.5 * size_)) + 1;
-    for (int i = 0; i <= steps; ++i) {
-      const double t = range * i / steps / h;  // ray parameter: horizontal distance range * i / steps
-      const Eigen::Vector2d p = o.head<2>() + t * dir.head<2>();
-      if ((p - centre).squaredNorm() <= radius * radius) continue;
-      if (p.x() < x0_ || p.y() < y0_ || p.x() >= x0_ + nx_ * size_ || p.y() >= y0_ + ny_ * size_) continue;
-      const std::int32_t c = cells_[index(p.x(), p.y())];
-      if (c == kEmpty || c == own) continue;
-      if (c == kMixed || !(tops[c] < o.z() + t * dir.z() - margin)) return true;
-    }
-    return false;
-  }
-
- private:
-  static constexpr std::int32_t kEmpty = -1, kMixed = -2;
-  std::size_t index(double x, double y) const {
-    const int gx = std::min(nx_ - 1, static_cast<int>((x - x0_) / size_)), gy = std::min(ny_ - 1, static_cast<int>((y - y0_) / size_));
-    return static_cast<std::size_t>(gy) * nx_ + gx;
-  }
-  double size_, x0_ = 0, y0_ = 0;
-  int nx_ = 0, ny_ = 0;
-  std::vector<std::int32_t> cells_;
-};
-
 }  // namespace
 
 bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
@@ -111,6 +60,57 @@ MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map) {
   return out;
 }
 
+SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, double grid_size)
+    : objects_(findMeshObjects(mesh, map)), size_(grid_size) {
+  const auto& vertices = mesh.vertices();
+  if (vertices.empty()) return;
+  // each object's known top: its highest recovered height, unknown (+inf) before any estimate
+  tops_.assign(objects_.count, -std::numeric_limits<double>::infinity());
+  for (std::size_t j = 0; j < vertices.size(); ++j) {
+    if (objects_.of[j] >= 0 && !vertices[j].estimates.empty()) {
+      tops_[objects_.of[j]] = std::max(tops_[objects_.of[j]], static_cast<double>(vertices[j].recovered_height));
+    }
+  }
+  for (double& top : tops_) {
+    if (!std::isfinite(top)) top = std::numeric_limits<double>::infinity();
+  }
+  // which object stands where
+  const double cell = map.voxelSize();
+  const auto [lo, hi] = mesh.cellBounds();
+  x0_ = lo.x() * cell, y0_ = lo.y() * cell;
+  nx_ = static_cast<int>((hi.x() - lo.x() + 1) * cell / size_) + 1;
+  ny_ = static_cast<int>((hi.y() - lo.y() + 1) * cell / size_) + 1;
+  cells_.assign(static_cast<std::size_t>(nx_) * ny_, kEmpty);
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    if (objects_.of[i] < 0) continue;
+    std::int32_t& c = cells_[index((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)];
+    c = (c == kEmpty || c == objects_.of[i]) ? objects_.of[i] : kMixed;
+  }
+}
+
+std::size_t SkylineOwners::index(double x, double y) const {
+  const int gx = std::min(nx_ - 1, static_cast<int>((x - x0_) / size_)), gy = std::min(ny_ - 1, static_cast<int>((y - y0_) / size_));
+  return static_cast<std::size_t>(gy) * nx_ + gx;
+}
+
+bool SkylineOwners::otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
+                                double radius, double margin) const {
+  if (cells_.empty()) return false;
+  const double h = dir.head<2>().norm();
+  if (h < 1e-12) return false;
+  const int steps = static_cast<int>(range / (0.5 * size_)) + 1;
+  for (int i = 0; i <= steps; ++i) {
+    const double t = range * i / steps / h;  // ray parameter: horizontal distance range * i / steps
+    const Eigen::Vector2d p = o.head<2>() + t * dir.head<2>();
+    if ((p - centre).squaredNorm() <= radius * radius) continue;
+    if (p.x() < x0_ || p.y() < y0_ || p.x() >= x0_ + nx_ * size_ || p.y() >= y0_ + ny_ * size_) continue;
+    const std::int32_t c = cells_[index(p.x(), p.y())];
+    if (c == kEmpty || c == own) continue;
+    if (c == kMixed || !(tops_[c] < o.z() + t * dir.z() - margin)) return true;
+  }
+  return false;
+}
+
 std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary) {
   std::vector<std::int16_t> top;
   if (boundary.empty() || boundary.type() != CV_8UC1) return top;
@@ -138,23 +138,8 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const int cols = static_cast<int>(tops_px.size());
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
-  MeshObjects objects;
-  std::optional<ObjectGrid> grid;
-  std::vector<double> object_tops;
-  if (cfg.clear_line) {
-    objects = findMeshObjects(mesh, map);
-    grid.emplace(mesh, map, objects, 1.0);
-    // each object's known top: its highest recovered height, unknown (+inf) before any estimate
-    object_tops.assign(objects.count, -std::numeric_limits<double>::infinity());
-    for (std::size_t j = 0; j < vertices.size(); ++j) {
-      if (objects.of[j] >= 0 && !vertices[j].estimates.empty()) {
-        object_tops[objects.of[j]] = std::max(object_tops[objects.of[j]], static_cast<double>(vertices[j].recovered_height));
-      }
-    }
-    for (double& top : object_tops) {
-      if (!std::isfinite(top)) top = std::numeric_limits<double>::infinity();
-    }
-  }
+  std::optional<SkylineOwners> owners;
+  if (cfg.clear_line) owners.emplace(mesh, map);
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     MeshVertex& m = vertices[i];
     if (!nonGround(m, map)) continue;
@@ -176,15 +161,14 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
-    if (grid) {
-      if (grid->otherMayOwn(centre, dir, cfg.max_distance, objects.of[i], Eigen::Vector2d(x, y), 1.0, object_tops, 1.0)) {
+    if (owners) {
+      if (owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0, 1.0)) {
         ++stats.not_clear;
         continue;
       }
     }
     mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
     ++stats.estimated;
-    stats.estimated_vertices.push_back(i);
   }
   return stats;
 }

@@ -57,6 +57,30 @@ struct MeshObjects {
 };
 MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map);
 
+// Which sensed object may own a skyline pixel (clear_line): the mesh's objects on a grid of
+// grid_size [m] cells, with each object's known top (its highest recovered height; unknown, +inf,
+// before any estimate).
+class SkylineOwners {
+ public:
+  SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, double grid_size = 1.0);
+  const MeshObjects& objects() const { return objects_; }
+  // Could the pixel whose ray (origin o, direction dir, world frame), followed up to `range` metres
+  // horizontally, belong to an object other than `own`? It could where the ray, outside the disc
+  // (centre, radius [m]), passes over a grid cell of another object (or of several) whose top is not
+  // at least `margin` [m] below the ray there.
+  bool otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
+                   double radius, double margin) const;
+
+ private:
+  static constexpr std::int32_t kEmpty = -1, kMixed = -2;
+  std::size_t index(double x, double y) const;
+  MeshObjects objects_;
+  std::vector<double> tops_;
+  double size_ = 1.0, x0_ = 0, y0_ = 0;
+  int nx_ = 0, ny_ = 0;
+  std::vector<std::int32_t> cells_;  // per grid cell: the object there, kEmpty or kMixed
+};
+
 // Per column of a boundary image (CV_8UC1), its topmost boundary pixel's row, -1 where the column
 // has none: the top searched above each vertex. Empty for an empty or non-CV_8UC1 image.
 std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary);
@@ -66,7 +90,6 @@ struct BoundaryEstimationStats {
   int estimated = 0;  // of which received a height estimate
   int no_sky = 0;     // of which were skipped: no sky above their top boundary
   int not_clear = 0;  // of which were skipped: another object in their column (clear_line)
-  std::vector<std::uint32_t> estimated_vertices;  // the ids of the vertices that received an estimate
 };
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.

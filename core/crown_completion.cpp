@@ -50,15 +50,10 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
 }  // namespace
 
 int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& k,
-                          const Pose& world_from_camera, const std::vector<std::uint32_t>& estimated_vertices,
-                          const CrownConfig& cfg, const BoundaryEstimationConfig& sky_cfg) {
-  if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty() || estimated_vertices.empty()) return 0;
-  const MeshObjects objects = findMeshObjects(mesh, map);
-  // the objects with an estimate in this frame
-  std::vector<std::uint8_t> clear(objects.count, 0);
-  for (std::uint32_t i : estimated_vertices) {
-    if (i < objects.of.size() && objects.of[i] >= 0) clear[objects.of[i]] = 1;
-  }
+                          const Pose& world_from_camera, const CrownConfig& cfg, const BoundaryEstimationConfig& sky_cfg) {
+  if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty()) return 0;
+  const SkylineOwners owners(mesh, map);
+  const MeshObjects& objects = owners.objects();
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
   auto sky = [&](int u, int row) {
@@ -66,7 +61,6 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   };
   int measured = 0;
   for (const Trunk& t : findTrunks(mesh, map, objects, cfg.max_trunk_width)) {
-    if (!clear[t.object]) continue;
     const Point3 camera_point = camera_from_world * Point3(t.centre.x(), t.centre.y(), t.top);
     const auto px = project(k, camera_point);
     if (!px) continue;
@@ -94,6 +88,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
     if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) continue;
+    if (sky_cfg.clear_line && owners.otherMayOwn(centre, dir, sky_cfg.max_distance, t.object, t.centre, 1.0, 1.0)) continue;
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
     ++measured;
   }

@@ -191,8 +191,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
                                                              world_from_camera, config_.estimation, frame.image->rgb);
     rec.estimated_vertices = stats.estimated;
     if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
-    crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, stats.estimated_vertices,
-                    config_.crown, config_.estimation);
+    crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, config_.crown, config_.estimation);
     rec.estimation_ms = msSince(t);
   }
   rec.total_ms = msSince(start);

@@ -27,9 +27,24 @@ struct Tree {
   TerrainMesh mesh;
   CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   Pose pose = northCamera();
-  Tree() {
+  // building_behind: a wall the lidar saw 10 m behind the tree (y = 30 m), its top unknown
+  explicit Tree(bool building_behind = false) {
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
+    if (building_behind) {
+      for (int x = -20; x <= 20; ++x) {
+        Voxel v;
+        v.height = 3.0f;
+        v.index = VoxelIndex(x, 150, 15);
+        v.label = VoxelLabel::NonGround;
+        MeshVertex m;
+        m.cell = CellIndex(x, 150);
+        m.top_voxel = static_cast<std::uint32_t>(voxels.size());
+        m.sensed_height = v.height;
+        voxels.push_back(v);
+        vertices.push_back(m);
+      }
+    }
     for (int x = -25; x <= 25; ++x) {
       for (int y = 75; y <= 125; ++y) {
         const bool trunk = x == 0 && y == 100;
@@ -42,7 +57,6 @@ struct Tree {
         m.cell = CellIndex(x, y);
         m.top_voxel = static_cast<std::uint32_t>(voxels.size());
         m.sensed_height = v.height;
-        if (trunk) trunk_vertex = m.top_voxel;
         voxels.push_back(v);
         vertices.push_back(m);
       }
@@ -66,7 +80,6 @@ struct Tree {
                static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
     return rgb;
   }
-  std::uint32_t trunk_vertex = 0;
 };
 
 TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalCap) {
@@ -76,11 +89,11 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   CrownConfig cfg;
   cfg.enabled = true;
   // off (the default): nothing measured
-  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, {tree.trunk_vertex}, CrownConfig{},
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, CrownConfig{},
                             BoundaryEstimationConfig{}),
             0);
   for (int frame = 0; frame < 3; ++frame) {
-    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, {tree.trunk_vertex}, cfg, BoundaryEstimationConfig{}), 1);
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
   }
   EXPECT_EQ(sampler.trunks(), 1u);
   // seen from one spot only: a crown behind the column could not have shown itself, nothing raised
@@ -102,22 +115,27 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   EXPECT_NEAR(at(0, 100).height(), 11.0, 0.15);
 }
 
-TEST(CrownCompletionTest, NoSampleWithoutAClearEstimateOrWithTheCrownCutOff) {
+TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOff) {
   Tree tree;
   CrownSampler sampler;
   CrownConfig cfg;
   cfg.enabled = true;
   cfg.min_baseline = 0;
-  // boundary estimation gave the trunk no estimate in this frame: its column may be another's
-  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, {}, cfg, BoundaryEstimationConfig{}), 0);
+  // a sensed wall behind the tree, of unknown height, may own the crown's top
+  Tree behind(true);
+  EXPECT_EQ(sampler.measure(behind.mesh, behind.map, behind.image(), behind.k, behind.pose, cfg, BoundaryEstimationConfig{}), 0);
+  BoundaryEstimationConfig no_clear_line;
+  no_clear_line.clear_line = false;
+  EXPECT_EQ(sampler.measure(behind.mesh, behind.map, behind.image(), behind.k, behind.pose, cfg, no_clear_line), 1);
+  sampler = CrownSampler();
   // the crown runs off the image top: its top is unknown
-  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(400), tree.k, tree.pose, {tree.trunk_vertex}, cfg,
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(400), tree.k, tree.pose, cfg,
                             BoundaryEstimationConfig{}),
             0);
   EXPECT_EQ(sampler.trunks(), 0u);
   // too few samples: nothing raised
   CrownSampler once;
-  EXPECT_EQ(once.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, {tree.trunk_vertex}, cfg, BoundaryEstimationConfig{}), 1);
+  EXPECT_EQ(once.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
   EXPECT_EQ(once.apply(tree.mesh, tree.map, cfg), 0);
 }
 
