@@ -1,6 +1,7 @@
 #pragma once
 // The pipeline: pose -> voxel map -> terrain mesh -> ground segmentation -> 2D boundary detection
-// -> 3D boundary estimation, one sensor frame at a time. It reads only SensorFrame and the rig
+// -> 3D boundary estimation (and crown samples), one sensor frame at a time; at finish() the whole-map
+// segmentation, footprint completion and crown completion. It reads only SensorFrame and the rig
 // calibration; it writes nothing and prints nothing: warnings and timings are kept for the caller.
 
 #include "core/boundary_detection.hpp"

@@ -20,7 +20,9 @@ struct MeshVertex {
   std::vector<float> estimates; // [m] recovered-height estimates from the frames that saw the top
   float recovered_height = 0;   // [m] fused estimate (median), valid when !estimates.empty()
   bool spread = false;          // without estimates of its own: recovered_height comes from the
-                                // nearest estimated vertex of the same object (spreadEstimates)
+                                // nearest estimated vertex of the same object (spreadEstimates),
+                                // its completed footprint's roof (roofWalls) or a tree crown over it
+                                // (CrownSampler::apply)
 
   // raised by boundary estimation, from its own estimates or its object's
   bool raised() const { return !estimates.empty() || spread; }
