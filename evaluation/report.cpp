@@ -190,8 +190,17 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   for (const auto& f : pipeline.footprints()) {
     json corners = json::array();
     for (const auto& c : f.corners) corners.push_back({c.x(), c.y()});
-    list.push_back({{"corners_m", corners}, {"roof_height_m", f.roof_height}, {"wall_vertices", f.wall_vertices},
-                    {"raised_vertices", f.raised_vertices}});
+    json entry = {{"corners_m", corners}, {"roof_height_m", f.roof_height}, {"wall_vertices", f.wall_vertices},
+                  {"raised_vertices", f.raised_vertices}};
+    // the true building under it
+    const FootprintMatch match = matchFootprint(f, world, map.voxelSize());
+    if (!match.object.empty()) {
+      entry["true_building"] = match.object;
+      entry["true_top_m"] = match.true_top;
+      entry["roof_error_m"] = f.roof_height - match.true_top;
+      entry["footprint_iou"] = match.iou;
+    }
+    list.push_back(entry);
   }
 
   // height baselines on the height map: sensed only, inpainted, recovered

@@ -1,5 +1,6 @@
 #include "evaluation/scoring.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -98,6 +99,63 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
   for (const auto& [k, v] : objects) out.by_object[k] = {errorStats(v.first), errorStats(v.second)};
   for (const auto& [k, v] : kinds) out.by_kind[k] = {errorStats(v.first), errorStats(v.second)};
   for (const auto& [k, v] : views) out.by_view[k] = {errorStats(v.first), errorStats(v.second)};
+  return out;
+}
+
+namespace {
+
+// inside a polygon (any orientation): crossings of a ray towards +x
+bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool in = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Eigen::Vector2d& a = poly[i];
+    const Eigen::Vector2d& b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) in = !in;
+  }
+  return in;
+}
+
+}  // namespace
+
+FootprintMatch matchFootprint(const Footprint& f, const sim::World& world, double step) {
+  FootprintMatch out;
+  const std::vector<Eigen::Vector2d> rect(f.corners.begin(), f.corners.end());
+  // votes of the points inside the footprint for the building on top of them
+  std::map<std::string, int> votes;
+  std::map<int, const scenes::ObjectTruth*> by_geom;
+  for (const auto& o : world.truth().objects) {
+    if (o.object_class != scenes::GeomClass::Building) continue;
+    for (const auto& g : o.geoms) by_geom[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = &o;
+  }
+  Eigen::Vector2d lo = rect[0], hi = rect[0];
+  for (const auto& c : rect) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+  for (double y = lo.y() + 0.5 * step; y < hi.y(); y += step) {
+    for (double x = lo.x() + 0.5 * step; x < hi.x(); x += step) {
+      if (!insidePolygon(rect, {x, y})) continue;
+      int geom = -1;
+      world.surfaceHeight(x, y, &geom);
+      if (auto it = by_geom.find(geom); it != by_geom.end()) ++votes[it->second->id];
+    }
+  }
+  if (votes.empty()) return out;
+  const auto best = std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  const scenes::ObjectTruth* truth = nullptr;
+  for (const auto& o : world.truth().objects) {
+    if (o.id == best->first) truth = &o;
+  }
+  out.object = truth->id;
+  out.true_top = truth->top_height;
+  // intersection over union of the two footprints, on the same grid over both
+  for (const auto& c : truth->footprint) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+  std::size_t both = 0, either = 0;
+  for (double y = lo.y() + 0.5 * step; y < hi.y(); y += step) {
+    for (double x = lo.x() + 0.5 * step; x < hi.x(); x += step) {
+      const bool a = insidePolygon(rect, {x, y}), b = insidePolygon(truth->footprint, {x, y});
+      both += a && b;
+      either += a || b;
+    }
+  }
+  out.iou = either ? static_cast<double>(both) / static_cast<double>(either) : 0.0;
   return out;
 }
 

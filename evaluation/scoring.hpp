@@ -57,4 +57,14 @@ struct RoofScores {
 };
 RoofScores scoreRoofCells(const std::vector<RoofCell>& roof, double voxel_size, const sim::World& world);
 
+// The true building a completed footprint stands on: the building whose surface is the top of most
+// points of the footprint (on a grid of `step` [m]), its top height, and the intersection over union
+// of the two footprints. object is empty when no building is under it.
+struct FootprintMatch {
+  std::string object;
+  double true_top = 0;  // [m]
+  double iou = 0;
+};
+FootprintMatch matchFootprint(const Footprint& footprint, const sim::World& world, double step);
+
 }  // namespace terrain::eval

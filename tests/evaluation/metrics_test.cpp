@@ -1,5 +1,7 @@
 #include "evaluation/metrics.hpp"
 #include "evaluation/report.hpp"
+#include "evaluation/scoring.hpp"
+#include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -64,6 +66,28 @@ TEST(RunTruthTest, CameraFramesThinOutOverALongRun) {
   ASSERT_EQ(truth.cameras.size(), 50u);  // 0, 20, ..., 980
   for (std::size_t k = 0; k < truth.cameras.size(); ++k) EXPECT_EQ(truth.cameras[k].frame, static_cast<int>(20 * k));
   EXPECT_EQ(truth.path.size(), 1000u);
+}
+
+// the test wall is a building 1 m thick, x in [12, 13], y in [-40, 40], 20 m high
+Footprint rectangle(double x0, double x1, double y0, double y1) {
+  Footprint f;
+  f.corners = {Eigen::Vector2d(x0, y0), Eigen::Vector2d(x1, y0), Eigen::Vector2d(x1, y1), Eigen::Vector2d(x0, y1)};
+  return f;
+}
+
+TEST(FootprintMatchTest, FindsTheBuildingUnderAFootprintAndTheirOverlap) {
+  const auto world = test::wallWorld(12.0);
+  // 4 m of the wall: 20 x 5 grid points of its 400 x 5
+  const FootprintMatch on = matchFootprint(rectangle(12, 13, -2, 2), *world, 0.2);
+  EXPECT_EQ(on.object, "wall");
+  EXPECT_DOUBLE_EQ(on.true_top, 20.0);
+  EXPECT_NEAR(on.iou, 100.0 / 2000.0, 1e-12);
+  // half on the wall (3 of 5 columns of points), half on the ground beside it
+  const FootprintMatch half = matchFootprint(rectangle(12.4, 13.4, -2, 2), *world, 0.2);
+  EXPECT_EQ(half.object, "wall");
+  EXPECT_NEAR(half.iou, 60.0 / 2040.0, 1e-12);
+  // on open ground: no building
+  EXPECT_TRUE(matchFootprint(rectangle(20, 22, -2, 2), *world, 0.2).object.empty());
 }
 
 }  // namespace
