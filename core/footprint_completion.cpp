@@ -21,6 +21,11 @@ struct Rectangle {
     const Eigen::Vector2d q = local(p);
     return std::abs(q.x()) < a - inset && std::abs(q.y()) < b - inset;
   }
+  // no deeper inside than `tolerance` (a point outside counts as on the outline)
+  bool onOutline(const Eigen::Vector2d& p, double tolerance) const {
+    const Eigen::Vector2d q = local(p);
+    return std::min(a - std::abs(q.x()), b - std::abs(q.y())) <= tolerance;
+  }
   std::array<Eigen::Vector2d, 4> corners() const {
     return {centre - a * u - b * v, centre + a * u - b * v, centre + a * u + b * v, centre - a * u + b * v};
   }
@@ -70,10 +75,7 @@ double sideSupport(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Ter
 // share of the points within `tolerance` of the rectangle's outline
 double outlineShare(const Rectangle& r, const std::vector<Eigen::Vector2d>& points, double tolerance) {
   std::size_t on = 0;
-  for (const auto& p : points) {
-    const Eigen::Vector2d q = r.local(p);
-    on += std::min(r.a - std::abs(q.x()), r.b - std::abs(q.y())) <= tolerance;
-  }
+  for (const auto& p : points) on += r.onOutline(p, tolerance);
   return points.empty() ? 0.0 : static_cast<double>(on) / static_cast<double>(points.size());
 }
 
@@ -163,14 +165,13 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
     f.roof_height = raised[raised.size() / 2];
     f.object = o;
     f.wall_vertices = static_cast<int>(ids.size());
-    f.wall_tolerance = cfg.wall_tolerance;
     f.raised_vertices = static_cast<int>(raised.size());
     out.push_back(f);
   }
   return out;
 }
 
-int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints) {
+int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints, const FootprintConfig& cfg) {
   if (footprints.empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   std::vector<const Footprint*> of_object(objects.count, nullptr);
@@ -184,9 +185,7 @@ int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprin
     if (objects.of[i] < 0 || !of_object[objects.of[i]] || !m.estimates.empty()) continue;
     // only the object's cells on the footprint's outline: the rest are not its walls
     const Footprint& f = *of_object[objects.of[i]];
-    const Rectangle r = Rectangle::fromCorners(f.corners);
-    const Eigen::Vector2d q = r.local(centreOf(m.cell, map.voxelSize()));
-    if (std::min(r.a - std::abs(q.x()), r.b - std::abs(q.y())) > f.wall_tolerance) continue;
+    if (!Rectangle::fromCorners(f.corners).onOutline(centreOf(m.cell, map.voxelSize()), cfg.wall_tolerance)) continue;
     m.spread = true;
     m.recovered_height = f.roof_height;
     ++raised;

@@ -40,7 +40,6 @@ struct Footprint {
   std::int32_t object = -1;                // the MeshObjects id it completes
   int wall_vertices = 0;                   // the object's mesh vertices
   int raised_vertices = 0;                 // of which had estimates of their own
-  double wall_tolerance = 0;               // [m] the object's cells this close to the outline are its walls
 };
 
 // The footprints of the mesh's objects, in object order. Empty when config.enabled is false.
@@ -48,7 +47,7 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
 
 // The walls of completed footprints (their object's vertices on the outline) that have no estimate
 // of their own take the roof height, as spreadEstimates would (MeshVertex::spread). Returns the number of vertices raised so.
-int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints);
+int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints, const FootprintConfig& config);
 
 // A cell the mesh has no vertex for, inside a footprint, at its roof height [m].
 struct RoofCell {

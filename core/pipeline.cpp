@@ -117,7 +117,7 @@ bool Pipeline::restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertic
 
 void Pipeline::completeFootprints() {
   footprints_ = terrain::completeFootprints(mesh_, map_, config_.footprint);
-  roofWalls(mesh_, map_, footprints_);
+  roofWalls(mesh_, map_, footprints_, config_.footprint);
   roof_cells_ = terrain::roofCells(footprints_, mesh_, map_.voxelSize());
 }
 

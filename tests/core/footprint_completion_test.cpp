@@ -93,7 +93,7 @@ TEST(FootprintCompletionTest, WallsWithoutEstimatesTakeTheRoofHeight) {
   const auto footprints = completeFootprints(s.mesh, s.map, FootprintConfig{});
   ASSERT_EQ(footprints.size(), 1u);
   EXPECT_EQ(footprints[0].raised_vertices, 40);
-  EXPECT_EQ(roofWalls(s.mesh, s.map, footprints), 9);
+  EXPECT_EQ(roofWalls(s.mesh, s.map, footprints, FootprintConfig{}), 9);
   const auto& v = s.mesh.vertices();
   for (std::size_t i = 0; i < 49; ++i) EXPECT_FLOAT_EQ(v[i].height(), 10.0f) << i;
   for (std::size_t i = 49; i < v.size(); ++i) EXPECT_FALSE(v[i].raised()) << i;
