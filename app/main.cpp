@@ -110,7 +110,7 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
                "complete building footprints from two walls of a corner and roof them at the walls' recovered height "
                "(default: on)");
   cmd.add_flag("--crowns,!--no-crowns", c.crown.enabled,
-               "raise the ground under tree crowns measured against the sky above sensed trunks (default: off)");
+               "raise the ground under tree crowns measured against the sky above sensed trunks (default: on)");
   cmd.add_option("--spread-distance", c.estimation.spread_distance,
                  "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();

@@ -79,6 +79,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"crown.max_top_spread", num(c.crown.max_top_spread)},
       {"crown.min_height_px", integer(c.crown.min_height_px)},
       {"crown.min_baseline", num(c.crown.min_baseline)},
+      {"crown.max_offcentre", num(c.crown.max_offcentre)},
   };
 }
 
@@ -129,6 +130,7 @@ void validate(const PipelineConfig& c) {
   require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
   require(c.crown.min_height_px >= 1, "crown.min_height_px", c.crown.min_height_px, ">= 1 px");
   require(c.crown.min_baseline >= 0, "crown.min_baseline", c.crown.min_baseline, ">= 0 m");
+  require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre, "[0, 0.5]");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
           c.estimation.fusion_quantile, "[0, 1]");
 }
@@ -165,7 +167,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["crown"] = {{"enabled", c.crown.enabled}, {"max_trunk_width", c.crown.max_trunk_width},
                 {"min_radius", c.crown.min_radius}, {"max_radius", c.crown.max_radius},
                 {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
-                {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline}};
+                {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline},
+                {"max_offcentre", c.crown.max_offcentre}};
   return j.dump();
 }
 

@@ -59,20 +59,32 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   auto sky = [&](int u, int row) {
     return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);
   };
+  // where every trunk's top appears in the image (u < 0: not in the image)
+  struct View {
+    int u = -1, v = -1;
+    double depth = 0;  // [m] along the optical axis
+  };
+  const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, cfg.max_trunk_width);
+  std::vector<View> views(trunks.size());
+  for (std::size_t i = 0; i < trunks.size(); ++i) {
+    const Point3 p = camera_from_world * Point3(trunks[i].centre.x(), trunks[i].centre.y(), trunks[i].top);
+    const auto px = project(k, p);
+    if (px && px->x() < rgb.cols && px->y() < rgb.rows) views[i] = {static_cast<int>(px->x()), static_cast<int>(px->y()), p.z()};
+  }
   int measured = 0;
-  for (const Trunk& t : findTrunks(mesh, map, objects, cfg.max_trunk_width)) {
-    const Point3 camera_point = camera_from_world * Point3(t.centre.x(), t.centre.y(), t.top);
-    const auto px = project(k, camera_point);
-    if (!px) continue;
-    const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
-    if (u >= rgb.cols || v >= rgb.rows) continue;
+  for (std::size_t i = 0; i < trunks.size(); ++i) {
+    const Trunk& t = trunks[i];
+    const int u = views[i].u, v = views[i].v;
+    if (u < 0) continue;
     // up the column while not sky: the crown's top is the last non-sky row
     int top = v;
     while (top - 1 >= 0 && !sky(u, top - 1)) --top;
     if (top == 0 || v - top < cfg.min_height_px) continue;  // cut off by the image top, or nothing above
-    // the widest non-sky run around the column, row by row down from the top, while sky bounds it
-    // on both sides and neither end jumps outwards (something behind joining the crown)
-    int widest = 0, prev_left = u, prev_right = u;
+    // the non-sky runs around the column, row by row down from the top, while sky bounds them on both
+    // sides and neither end jumps outwards (something behind joining the crown): the widest, and
+    // the crown's half width as the largest distance from the column to the nearer end of a run (a
+    // crown beside it, joined on one side, does not widen it)
+    int widest = 0, prev_left = u, prev_right = u, widest_left = u, half = 0;
     for (int row = top; row < v; ++row) {
       int left = u, right = u;
       while (left - 1 >= 0 && !sky(left - 1, row)) --left;
@@ -80,15 +92,31 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       if (left == 0 || right == rgb.cols - 1) break;
       const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
       if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
-      widest = std::max(widest, right - left + 1);
+      if (right - left + 1 > widest) widest = right - left + 1, widest_left = left;
+      half = std::max(half, std::min(u - left, right - u));
       prev_left = left, prev_right = right;
     }
     if (widest == 0) continue;
-    const double radius = 0.5 * widest * camera_point.z() / k.fx;
+    // a crown stands over its trunk: a widest run centred away from the trunk's column is another
+    // tree's crown, nearer or farther (the clear-line test knows only sensed objects, and crowns are
+    // above the lidar's reach)
+    const double run_centre = widest_left + 0.5 * (widest - 1);
+    if (std::abs(run_centre - u) > cfg.max_offcentre * widest + 1.0) continue;
+    // of the trunks standing under the run (their tops below the crown's), the one nearest its
+    // centre owns it
+    bool nearer = false;
+    for (std::size_t j = 0; j < trunks.size() && !nearer; ++j) {
+      nearer = j != i && views[j].u >= widest_left && views[j].u < widest_left + widest && views[j].v > top &&
+               std::abs(views[j].u - run_centre) < std::abs(u - run_centre);
+    }
+    if (nearer) continue;
+    const double radius = (half + 0.5) * views[i].depth / k.fx;
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
     if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) continue;
-    if (sky_cfg.clear_line && owners.otherMayOwn(centre, dir, sky_cfg.max_distance, t.object, t.centre, 1.0, 1.0)) continue;
+    // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
+    const double reach = std::max(sky_cfg.max_distance, (t.centre - centre.head<2>()).norm() + cfg.max_radius);
+    if (sky_cfg.clear_line && owners.otherMayOwn(centre, dir, reach, t.object, t.centre, 1.0, 1.0)) continue;
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
     ++measured;
   }

@@ -27,8 +27,11 @@ struct Tree {
   TerrainMesh mesh;
   CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   Pose pose = northCamera();
-  // building_behind: a wall the lidar saw 10 m behind the tree (y = 30 m), its top unknown
-  explicit Tree(bool building_behind = false) {
+  bool second = false;
+  // building_behind: a wall the lidar saw 10 m behind the tree (y = 30 m), its top unknown;
+  // second_trunk: another trunk the lidar saw 1 m east of this one and 2 m behind it, rising into
+  // the crown in the image, its own crown not shown
+  explicit Tree(bool building_behind = false, bool second_trunk = false) : second(second_trunk) {
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
     if (building_behind) {
@@ -47,7 +50,7 @@ struct Tree {
     }
     for (int x = -25; x <= 25; ++x) {
       for (int y = 75; y <= 125; ++y) {
-        const bool trunk = x == 0 && y == 100;
+        const bool trunk = (x == 0 && y == 100) || (second_trunk && x == 5 && y == 110);
         if (!trunk && std::hypot(x * 0.2, (y - 100) * 0.2) > 5.0) continue;
         Voxel v;
         v.height = trunk ? 3.0f : 0.0f;
@@ -76,6 +79,11 @@ struct Tree {
     const double radius_px = k.fx * std::asin(3.0 / 20.0);
     cv::rectangle(rgb, cv::Point(static_cast<int>(base->x()) - 2, static_cast<int>(centre->y()) - crown_shift),
                   cv::Point(static_cast<int>(base->x()) + 2, static_cast<int>(base->y())), cv::Scalar(90, 60, 30), cv::FILLED);
+    if (second) {
+      const auto behind = project(k, camera_from_world * Point3(1.1, 22.1, 0.0));
+      cv::rectangle(rgb, cv::Point(static_cast<int>(behind->x()) - 2, static_cast<int>(centre->y())),
+                    cv::Point(static_cast<int>(behind->x()) + 2, static_cast<int>(behind->y())), cv::Scalar(90, 60, 30), cv::FILLED);
+    }
     cv::circle(rgb, cv::Point(static_cast<int>(std::lround(centre->x())), static_cast<int>(std::lround(centre->y())) - crown_shift),
                static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
     return rgb;
@@ -88,8 +96,10 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   const cv::Mat rgb = tree.image();
   CrownConfig cfg;
   cfg.enabled = true;
-  // off (the default): nothing measured
-  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, CrownConfig{},
+  // off: nothing measured
+  CrownConfig off;
+  off.enabled = false;
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, off,
                             BoundaryEstimationConfig{}),
             0);
   for (int frame = 0; frame < 3; ++frame) {
@@ -137,6 +147,30 @@ TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOf
   CrownSampler once;
   EXPECT_EQ(once.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
   EXPECT_EQ(once.apply(tree.mesh, tree.map, cfg), 0);
+}
+
+TEST(CrownCompletionTest, OfTwoTrunksUnderOneCrownOnlyTheOneNearestItsCentreTakesTheSample) {
+  // the crown of the first tree stands over both trunks in the image: the second trunk's column lies
+  // inside it, 14 px from its centre (the crown is 47 px wide each way), so its walk up ends at the
+  // same crown top and the crown's widest row is centred near enough over it
+  Tree tree(false, true);
+  CrownConfig cfg;
+  cfg.enabled = true;
+  cfg.min_baseline = 0;
+  CrownSampler sampler;
+  for (int frame = 0; frame < 3; ++frame) {
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+  }
+  EXPECT_EQ(sampler.trunks(), 1u);
+  EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  const auto& v = tree.mesh.vertices();
+  auto at = [&](int x, int y) -> const MeshVertex& { return v[tree.mesh.find(CellIndex(x, y))]; };
+  EXPECT_NEAR(at(1, 100).height(), 11.0, 0.15);
+  // around the second trunk only the first crown's cap: at 2 m east, 2 m north of the first trunk
+  // 11 - 3 + sqrt(9 - 8)
+  EXPECT_NEAR(at(10, 110).height(), 9.0, 0.25);
+  // no cap of its own: 2.2 m north of it (4.3 m from the first trunk) the ground stays ground
+  EXPECT_FALSE(at(5, 121).raised());
 }
 
 }  // namespace
