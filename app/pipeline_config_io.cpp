@@ -58,6 +58,12 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.max_height", num(c.estimation.max_height)},
       {"estimation.top_margin", integer(c.estimation.top_margin)},
       {"estimation.fusion_quantile", num(c.estimation.fusion_quantile)},
+      {"estimation.max_estimates",
+       [&c](const YAML::Node& n) {
+         const int v = n.as<int>();
+         require(v >= 1 && v <= 1000, "estimation.max_estimates", v, "[1, 1000]");
+         c.estimation.max_estimates = static_cast<std::size_t>(v);
+       }},
       {"estimation.clear_line", [&c](const YAML::Node& n) { c.estimation.clear_line = n.as<bool>(); }},
       {"estimation.require_sky_above", [&c](const YAML::Node& n) { c.estimation.require_sky_above = n.as<bool>(); }},
       {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
@@ -131,6 +137,8 @@ void validate(const PipelineConfig& c) {
   require(c.crown.min_height_px >= 1, "crown.min_height_px", c.crown.min_height_px, ">= 1 px");
   require(c.crown.min_baseline >= 0, "crown.min_baseline", c.crown.min_baseline, ">= 0 m");
   require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre, "[0, 0.5]");
+  require(c.estimation.max_estimates >= 1 && c.estimation.max_estimates <= 1000, "estimation.max_estimates",
+          static_cast<double>(c.estimation.max_estimates), "[1, 1000]");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
           c.estimation.fusion_quantile, "[0, 1]");
 }
@@ -156,7 +164,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                    {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},
                    {"dilate_height", c.boundary.dilate_height}, {"erode_all_directions", c.boundary.erode_all_directions}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
-                     {"top_margin", c.estimation.top_margin}, {"fusion_quantile", c.estimation.fusion_quantile},
+                     {"top_margin", c.estimation.top_margin}, {"max_estimates", c.estimation.max_estimates},
+                     {"fusion_quantile", c.estimation.fusion_quantile},
                      {"clear_line", c.estimation.clear_line}, {"require_sky_above", c.estimation.require_sky_above},
                      {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
                      {"spread_distance", c.estimation.spread_distance}};
