@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -23,71 +25,166 @@ bool parseSolver(const std::string& s, GroundSegmentationConfig::Solver& out) {
   return false;
 }
 
+namespace {
+
+// A histogram of heights in bins of bin_size whose edges are whole multiples of it, and its peak
+// refined to the mean of the heights in the peak bin and its two neighbours. Counts and sums are
+// kept in integers (heights in 2^-20 m), so the peak does not depend on the order in which heights
+// are added: the whole-map and the incremental segmentation, which visit a tile's voxels in
+// different orders, agree to the bit.
+class PeakHistogram {
+ public:
+  // empties the histogram for heights in [lo, hi] [m] (a height outside falls in the end bin)
+  void reset(double lo, double hi, double bin_size) {
+    inv_ = 1.0 / bin_size;
+    first_ = floorInt(lo * inv_) - 1;
+    bins_ = std::max(1, floorInt(hi * inv_) - first_ + 2);
+    count_.assign(kLanes * bins_, 0);
+    sum_.assign(kLanes * bins_, 0);
+  }
+  void add(double h) { add(h, (lane_ = (lane_ + 1) & (kLanes - 1))); }
+  // adds h[i] - offset for i in [0, n)
+  void add(const float* h, std::size_t n, double offset) {
+    int lane = lane_;
+    for (std::size_t i = 0; i < n; ++i) add(h[i] - offset, lane = (lane + 1) & (kLanes - 1));
+    lane_ = lane;
+  }
+  // the refined peak [m]; NaN if empty. The lowest bin among equal peaks: ground lies under objects.
+  double peak() const {
+    int p = 0;
+    std::int64_t best = -1;
+    for (int b = 0; b < bins_; ++b) {
+      const std::int64_t c = count(b);
+      if (c > best) best = c, p = b;
+    }
+    std::int64_t n = 0, sum = 0;
+    for (int b = std::max(0, p - 1); b <= std::min(bins_ - 1, p + 1); ++b) {
+      for (int l = 0; l < kLanes; ++l) sum += sum_[kLanes * b + l];
+      n += count(b);
+    }
+    return n == 0 ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(sum) / kScale / static_cast<double>(n);
+  }
+
+ private:
+  static constexpr int kLanes = 4;
+  static constexpr double kScale = 1048576.0;
+  static int floorInt(double x) {
+    const int t = static_cast<int>(x);
+    return t - (x < t);
+  }
+  // successive heights, mostly in one bin, go to different lanes: no chain of dependent
+  // read-modify-writes on one counter
+  void add(double h, int lane) {
+    const int b = std::clamp(floorInt(h * inv_) - first_, 0, bins_ - 1);
+    ++count_[kLanes * b + lane];
+    sum_[kLanes * b + lane] += static_cast<std::int64_t>(h * kScale);
+  }
+  std::int64_t count(int b) const {
+    std::int64_t c = 0;
+    for (int l = 0; l < kLanes; ++l) c += count_[kLanes * b + l];
+    return c;
+  }
+  double inv_ = 10;
+  int first_ = 0, bins_ = 0, lane_ = 0;
+  std::vector<std::int32_t> count_;
+  std::vector<std::int64_t> sum_;
+};
+
+// fixed chunks of nodes, so that sums over them come out the same whatever the thread count
+constexpr std::size_t kChunks = 64;
+
+}  // namespace
+
 double histogramPeak(const std::vector<double>& heights, double bin_size) {
   if (heights.empty()) return std::numeric_limits<double>::quiet_NaN();
   const auto [lo, hi] = std::minmax_element(heights.begin(), heights.end());
-  const double base = std::floor(*lo / bin_size) * bin_size;
-  const int bins = static_cast<int>((*hi - base) / bin_size) + 1;
-  std::vector<int> count(bins, 0);
-  for (double h : heights) ++count[std::min(bins - 1, static_cast<int>((h - base) / bin_size))];
-  // the lowest bin among equal peaks: ground lies under objects
-  const int peak = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
-  double sum = 0;
-  int n = 0;
-  for (double h : heights) {
-    const int b = std::min(bins - 1, static_cast<int>((h - base) / bin_size));
-    if (std::abs(b - peak) <= 1) sum += h, ++n;
-  }
-  return sum / n;
+  PeakHistogram histogram;
+  histogram.reset(*lo, *hi, bin_size);
+  for (double h : heights) histogram.add(h);
+  return histogram.peak();
+}
+
+void GmrfProblem::resize(std::size_t n) {
+  unary_ground.assign(n, 0.0f);
+  unary_nonground.assign(n, 0.0f);
+  next.assign(3 * n, kNone);
+  prev.assign(3 * n, kNone);
+  weight.assign(3 * n, 0.0f);
+  parity.assign(n, 0);
 }
 
 double gmrfEnergy(const GmrfProblem& p, const std::vector<std::uint8_t>& ground) {
+  const std::size_t n = ground.size();
+  std::vector<double> part(kChunks, 0.0);
+  tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+    double e = 0;
+    for (std::size_t v = n * c / kChunks; v < n * (c + 1) / kChunks; ++v) {
+      e += ground[v] ? p.unary_ground[v] : p.unary_nonground[v];
+      for (int a = 0; a < 3; ++a) {
+        const std::uint32_t u = p.next[3 * v + a];
+        if (u != GmrfProblem::kNone) e += ground[v] == ground[u] ? -p.weight[3 * v + a] : p.weight[3 * v + a];
+      }
+    }
+    part[c] = e;
+  });
   double e = 0;
-  for (std::size_t v = 0; v < ground.size(); ++v) e += ground[v] ? p.unary_ground[v] : p.unary_nonground[v];
-  for (const auto& edge : p.edges) e += ground[edge.u] == ground[edge.v] ? -edge.weight : edge.weight;
+  for (double x : part) e += x;
   return e;
 }
 
 int solveIcm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_iterations, int threads) {
   const std::size_t n = ground.size();
-  // adjacency in compressed rows
-  std::vector<std::uint32_t> start(n + 1, 0);
-  for (const auto& e : p.edges) ++start[e.u + 1], ++start[e.v + 1];
-  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
-  std::vector<std::uint32_t> nbr(start[n]);
-  std::vector<double> w(start[n]);
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (const auto& e : p.edges) {
-    nbr[fill[e.u]] = e.v, w[fill[e.u]++] = e.weight;
-    nbr[fill[e.v]] = e.u, w[fill[e.v]++] = e.weight;
-  }
-  std::vector<std::uint32_t> colour[2];
-  for (std::uint32_t v = 0; v < n; ++v) colour[p.parity[v] & 1].push_back(v);
   tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  // a grid's graph: every forward link matched by its backward one, and of nodes of two colours
+  std::vector<std::size_t> bad(kChunks, n);
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+      for (std::size_t v = n * c / kChunks; v < n * (c + 1) / kChunks && bad[c] == n; ++v) {
+        for (int a = 0; a < 3; ++a) {
+          const std::uint32_t u = p.next[3 * v + a];
+          if (u != GmrfProblem::kNone && (u >= n || p.prev[3 * u + a] != v || (p.parity[u] & 1) == (p.parity[v] & 1)))
+            bad[c] = v;
+        }
+      }
+    });
+  });
+  for (std::size_t v : bad) {
+    if (v != n)
+      throw std::invalid_argument("GMRF problem: node " + std::to_string(v) +
+                                  " is linked to a node that is missing, linked from another node along the same "
+                                  "axis, or of the same parity");
+  }
   int sweeps = 0;
   for (; sweeps < max_iterations; ++sweeps) {
-    bool changed = false;
-    for (const auto& nodes : colour) {
-      // nodes of one colour have no edges between them: update them all at once
-      std::vector<std::uint8_t> flip(nodes.size(), 0);
+    std::vector<std::uint8_t> changed(kChunks, 0);
+    for (std::uint8_t colour = 0; colour < 2; ++colour) {
+      // nodes of one colour have no pair between them: update them all at once, in place
       arena.execute([&] {
-        tbb::parallel_for(std::size_t{0}, nodes.size(), [&](std::size_t k) {
-          const std::uint32_t v = nodes[k];
-          double cost_g = p.unary_ground[v], cost_n = p.unary_nonground[v];
-          for (std::uint32_t j = start[v]; j < start[v + 1]; ++j) {
-            const bool other_ground = ground[nbr[j]] != 0;
-            cost_g += other_ground ? -w[j] : w[j];
-            cost_n += other_ground ? w[j] : -w[j];
+        tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+          for (std::size_t v = n * c / kChunks; v < n * (c + 1) / kChunks; ++v) {
+            if ((p.parity[v] & 1) != colour) continue;
+            float cost_g = p.unary_ground[v], cost_n = p.unary_nonground[v];
+            for (int a = 0; a < 3; ++a) {
+              const std::uint32_t u = p.next[3 * v + a];
+              if (u != GmrfProblem::kNone) {
+                const float w = p.weight[3 * v + a];
+                cost_g += ground[u] ? -w : w;
+                cost_n += ground[u] ? w : -w;
+              }
+              const std::uint32_t b = p.prev[3 * v + a];
+              if (b != GmrfProblem::kNone) {
+                const float w = p.weight[3 * b + a];
+                cost_g += ground[b] ? -w : w;
+                cost_n += ground[b] ? w : -w;
+              }
+            }
+            const std::uint8_t best = cost_g < cost_n ? 1 : (cost_n < cost_g ? 0 : ground[v]);
+            if (best != ground[v]) ground[v] = best, changed[c] = 1;
           }
-          const std::uint8_t best = cost_g < cost_n ? 1 : (cost_n < cost_g ? 0 : ground[v]);
-          flip[k] = best != ground[v];
         });
       });
-      for (std::size_t k = 0; k < nodes.size(); ++k) {
-        if (flip[k]) ground[nodes[k]] ^= 1, changed = true;
-      }
     }
-    if (!changed) break;
+    if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
   }
   return sweeps;
 }
@@ -160,18 +257,12 @@ Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
   return near2.plane(ref);
 }
 
-// The plane-fit candidates of a tile of k x k columns whose first column is (cx, cy) and whose voxels
-// are ids[0..n): the lowest voxel of every column, and of those the lowest of every 2 x 2 block of
-// columns, at its column's centre. A quarter of the columns fix a plane as well as all of them.
-// The whole-map and the incremental segmentation both take a tile's candidates from here.
-void tileCandidates(const std::vector<Voxel>& voxels, const std::uint32_t* ids, std::size_t n, int k, int cx, int cy,
-                    double cell, std::vector<Point3>& out) {
-  std::vector<float> low(static_cast<std::size_t>(k) * k, std::numeric_limits<float>::infinity());
-  for (std::size_t j = 0; j < n; ++j) {
-    const auto& v = voxels[ids[j]];
-    float& l = low[static_cast<std::size_t>(v.index.y() - cy) * k + (v.index.x() - cx)];
-    l = std::min(l, v.height);
-  }
+// The plane-fit candidates of a tile of k x k columns whose first column is (cx, cy), from the
+// height of the lowest voxel of each of its columns (row-major, +inf where empty): of those the
+// lowest of every 2 x 2 block of columns, at its column's centre. A quarter of the columns fix a
+// plane as well as all of them. The whole-map and the incremental segmentation both take a tile's
+// candidates from here.
+void candidatesFromLows(const std::vector<float>& low, int k, int cx, int cy, double cell, std::vector<Point3>& out) {
   out.clear();
   for (int r = 0; r < k; r += 2) {
     for (int c = 0; c < k; c += 2) {
@@ -188,250 +279,247 @@ void tileCandidates(const std::vector<Voxel>& voxels, const std::uint32_t* ids, 
   }
 }
 
-// h1 as a function of position, from one histogram or from tiles
-class GroundHeight {
+// Eqs. 19-20 for node i of a problem, a voxel of height h [m] at grid index (x, y, z), from the
+// ground height h1 at its column: the rough class (true: G1) and the single-site terms
+bool setUnary(GmrfProblem& p, std::size_t i, float h, int x, int y, int z, double ground,
+              const GroundSegmentationConfig& cfg) {
+  const double d = h - ground;
+  const bool g1 = std::abs(d) <= cfg.delta;
+  const bool in_range = std::abs(d) <= cfg.range_margin;
+  p.unary_ground[i] = static_cast<float>((g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha));
+  p.unary_nonground[i] = static_cast<float>((g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha));
+  p.parity[i] = static_cast<std::uint8_t>((x + y + z) & 1);
+  return g1;
+}
+
+// the pair-site weight of two neighbouring voxels of heights a and b (Eqs. 21-22)
+float pairWeight(const GroundSegmentationConfig& cfg, float a, float b) {
+  return static_cast<float>(cfg.beta + cfg.gamma * std::exp(-std::abs(a - b)));
+}
+
+// A set of tiles of k x k columns and their voxels, laid out tile by tile, column by column
+// (row-major inside the tile) and upwards inside each column: a position numbers a voxel in this
+// order. Finding a voxel's neighbours is then a walk along two short sorted columns, and a
+// tile's voxels are contiguous.
+class TileLayout {
  public:
-  GroundHeight(const VoxelMap& map, const GroundSegmentationConfig& cfg) : cfg_(cfg), cell_(map.voxelSize()) {
-    const auto& voxels = map.voxels();
-    if (cfg.histogram == GroundSegmentationConfig::Histogram::Global || voxels.empty()) {
-      std::vector<double> h;
-      h.reserve(voxels.size());
-      for (const auto& v : voxels) h.push_back(v.height);
-      global_ = histogramPeak(h, cfg.bin_size);
-      return;
-    }
-    // tiles of k x k columns on a dense grid over the map's extent
-    k_ = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell_)));
+  struct Tile {
+    int tx = 0, ty = 0;
+  };
+  // Every voxel of the map, in the tiles it covers (in row-major tile order).
+  TileLayout(const std::vector<Voxel>& voxels, int k) : k_(k) {
+    if (voxels.empty()) return;
     int x0 = voxels[0].index.x(), x1 = x0, y0 = voxels[0].index.y(), y1 = y0;
     for (const auto& v : voxels) {
       x0 = std::min(x0, v.index.x()), x1 = std::max(x1, v.index.x());
       y0 = std::min(y0, v.index.y()), y1 = std::max(y1, v.index.y());
     }
-    tx0_ = floorDiv(x0, k_), ty0_ = floorDiv(y0, k_);
-    nx_ = floorDiv(x1, k_) - tx0_ + 1, ny_ = floorDiv(y1, k_) - ty0_ + 1;
-    const std::size_t tiles = static_cast<std::size_t>(nx_) * ny_;
-    // voxel ids grouped by tile (counting sort)
-    std::vector<std::uint32_t> start(tiles + 1, 0), ids(voxels.size());
-    for (const auto& v : voxels) ++start[tileOf(v.index) + 1];
-    for (std::size_t t = 0; t < tiles; ++t) start[t + 1] += start[t];
+    setGrid(floorDiv(x0, k), floorDiv(y0, k), floorDiv(x1, k), floorDiv(y1, k));
+    // voxel ids grouped by tile (counting sort, in id order inside a tile)
+    const std::size_t n = voxels.size(), cells = static_cast<std::size_t>(nx_) * ny_;
+    std::vector<std::uint32_t> tile(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      tile[i] = static_cast<std::uint32_t>(gridCell(floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)));
+    });
+    std::vector<std::uint32_t> start(cells + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[tile[i] + 1];
+    for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    ids_.resize(n);
     {
       std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-      for (std::uint32_t i = 0; i < voxels.size(); ++i) ids[fill[tileOf(voxels[i].index)]++] = i;
+      for (std::uint32_t i = 0; i < n; ++i) ids_[fill[tile[i]]++] = i;
     }
-    // positions and heights in tile order, so that the window passes below read memory in order
-    std::vector<double> px(voxels.size()), py(voxels.size());
-    std::vector<float> ph(voxels.size());
-    tbb::parallel_for(std::size_t{0}, voxels.size(), [&](std::size_t j) {
-      const auto& v = voxels[ids[j]];
-      px[j] = (v.index.x() + 0.5) * cell_, py[j] = (v.index.y() + 0.5) * cell_, ph[j] = v.height;
-    });
-    // the plane-fit candidates of every tile
-    std::vector<std::vector<Point3>> lowest(tiles);
-    tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-      if (start[t] == start[t + 1]) return;
-      const int cx = (static_cast<int>(t % nx_) + tx0_) * k_, cy = (static_cast<int>(t / nx_) + ty0_) * k_;
-      tileCandidates(voxels, ids.data() + start[t], start[t + 1] - start[t], k_, cx, cy, cell_, lowest[t]);
-    });
-    // per tile: a plane through the window's plane-fit candidates, then the histogram of heights above it
-    planes_.assign(tiles, Plane{});
-    has_plane_.assign(tiles, 0);
-    tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-      if (start[t] == start[t + 1]) return;
-      const int tx = static_cast<int>(t % nx_), ty = static_cast<int>(t / nx_);
-      std::vector<const std::vector<Point3>*> candidates;
-      std::vector<double> residual;
-      std::size_t window = 0;
-      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-          const int ux = tx + dx, uy = ty + dy;
-          if (ux >= 0 && uy >= 0 && ux < nx_ && uy < ny_)
-            window +=
-                start[static_cast<std::size_t>(uy) * nx_ + ux + 1] - start[static_cast<std::size_t>(uy) * nx_ + ux];
+    std::vector<std::uint32_t> first;
+    for (std::size_t c = 0; c < cells; ++c) {
+      if (start[c] == start[c + 1]) continue;
+      grid_[c] = static_cast<std::int32_t>(tiles_.size());
+      tiles_.push_back({static_cast<int>(c % nx_) + gx0_, static_cast<int>(c / nx_) + gy0_});
+      first.push_back(start[c]);
+    }
+    first.push_back(static_cast<std::uint32_t>(n));
+    sortColumns(voxels, first);
+  }
+
+  // The voxels of the given tiles (tile coordinates and voxel ids), in that order.
+  TileLayout(const std::vector<Voxel>& voxels, int k, const std::vector<Tile>& tiles,
+             const std::vector<const std::vector<std::uint32_t>*>& ids)
+      : k_(k), tiles_(tiles) {
+    if (tiles.empty()) return;
+    int x0 = tiles[0].tx, x1 = x0, y0 = tiles[0].ty, y1 = y0;
+    for (const auto& t : tiles) {
+      x0 = std::min(x0, t.tx), x1 = std::max(x1, t.tx);
+      y0 = std::min(y0, t.ty), y1 = std::max(y1, t.ty);
+    }
+    setGrid(x0, y0, x1, y1);
+    std::vector<std::uint32_t> first{0};
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+      grid_[gridCell(tiles[t].tx, tiles[t].ty)] = static_cast<std::int32_t>(t);
+      ids_.insert(ids_.end(), ids[t]->begin(), ids[t]->end());
+      first.push_back(static_cast<std::uint32_t>(ids_.size()));
+    }
+    sortColumns(voxels, first);
+  }
+
+  int k() const { return k_; }
+  std::size_t size() const { return ids_.size(); }
+  const std::vector<Tile>& tiles() const { return tiles_; }
+  // index in tiles() of the tile at (tx, ty), or -1 if it is not in the layout
+  std::int64_t tileAt(int tx, int ty) const {
+    if (tx < gx0_ || ty < gy0_ || tx >= gx0_ + nx_ || ty >= gy0_ + ny_) return -1;
+    return grid_[gridCell(tx, ty)];
+  }
+  // first position of column c (row-major, 0..k*k) of tile t; column k*k is the tile's end
+  std::uint32_t column(std::size_t t, std::size_t c) const { return columns_[t * (k_ * k_ + 1) + c]; }
+  std::uint32_t id(std::size_t pos) const { return ids_[pos]; }
+  std::int32_t z(std::size_t pos) const { return z_[pos]; }
+  const float& height(std::size_t pos) const { return height_[pos]; }
+  // the heights of the lowest and the highest voxel of tile t [m]
+  float lowest(std::size_t t) const { return range_[2 * t]; }
+  float highest(std::size_t t) const { return range_[2 * t + 1]; }
+
+  // calls f(lx, ly, b, e) for every non-empty column of tile t, in row-major order: the column at
+  // (lx, ly) in the tile holds positions b .. e - 1
+  template <class F>
+  void forEachColumn(std::size_t t, F&& f) const {
+    const std::uint32_t* col = columns_.data() + t * (k_ * k_ + 1);
+    for (int ly = 0; ly < k_; ++ly) {
+      for (int lx = 0; lx < k_; ++lx, ++col) {
+        if (col[0] != col[1]) f(lx, ly, col[0], col[1]);
+      }
+    }
+  }
+
+  // the heights of the lowest voxel of every column of tile t (row-major, +inf where empty)
+  void columnLows(std::size_t t, std::vector<float>& low) const {
+    low.assign(static_cast<std::size_t>(k_) * k_, std::numeric_limits<float>::infinity());
+    for (std::size_t c = 0; c < low.size(); ++c) {
+      for (auto q = column(t, c); q < column(t, c + 1); ++q) low[c] = std::min(low[c], height_[q]);
+    }
+  }
+
+  // Links every voxel to its neighbours at +x, +y, +z inside the layout, with their pair weights.
+  void linkNeighbours(GmrfProblem& p, const GroundSegmentationConfig& cfg) const {
+    tbb::parallel_for(std::size_t{0}, tiles_.size(), [&](std::size_t t) {
+      const std::int64_t east = tileAt(tiles_[t].tx + 1, tiles_[t].ty), north = tileAt(tiles_[t].tx, tiles_[t].ty + 1);
+      forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t q = b; q + 1 < e; ++q) {
+          if (z_[q + 1] == z_[q] + 1) p.link(q, 2, q + 1, pairWeight(cfg, height_[q], height_[q + 1]));
         }
-      }
-      residual.reserve(window);
-      for (int pass = 0; pass < 2; ++pass) {
-        for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-          for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-            const int ux = tx + dx, uy = ty + dy;
-            if (ux < 0 || uy < 0 || ux >= nx_ || uy >= ny_) continue;
-            const std::size_t u = static_cast<std::size_t>(uy) * nx_ + ux;
-            if (pass == 0) {
-              candidates.push_back(&lowest[u]);
-              continue;
-            }
-            const Plane& plane = planes_[t];
-            for (std::uint32_t j = start[u]; j < start[u + 1]; ++j) residual.push_back(ph[j] - plane.at(px[j], py[j]));
-          }
+        const std::size_t c = static_cast<std::size_t>(ly) * k_ + lx;
+        if (lx + 1 < k_) {
+          linkColumns(p, cfg, b, e, column(t, c + 1), column(t, c + 2), 0);
+        } else if (east >= 0) {
+          const std::size_t o = static_cast<std::size_t>(ly) * k_;
+          linkColumns(p, cfg, b, e, column(east, o), column(east, o + 1), 0);
         }
-        if (pass == 0) planes_[t] = fitPlane(candidates);
-      }
-      planes_[t].c += histogramPeak(residual, cfg.bin_size);
-      has_plane_[t] = 1;
-    });
-  }
-
-  double at(double x, double y) const {
-    if (planes_.empty()) return global_;
-    const int tx = floorDiv(static_cast<int>(std::floor(x / cell_)), k_) - tx0_;
-    const int ty = floorDiv(static_cast<int>(std::floor(y / cell_)), k_) - ty0_;
-    if (tx < 0 || ty < 0 || tx >= nx_ || ty >= ny_) return global_;
-    const std::size_t t = static_cast<std::size_t>(ty) * nx_ + tx;
-    return has_plane_[t] ? planes_[t].at(x, y) : global_;
-  }
-  int tiles() const {
-    int n = 0;
-    for (auto h : has_plane_) n += h;
-    return planes_.empty() ? 1 : n;
-  }
-
- private:
-  std::size_t tileOf(const VoxelIndex& i) const {
-    return static_cast<std::size_t>(floorDiv(i.y(), k_) - ty0_) * nx_ + (floorDiv(i.x(), k_) - tx0_);
-  }
-
-  GroundSegmentationConfig cfg_;
-  double cell_;
-  double global_ = 0;
-  int k_ = 1, tx0_ = 0, ty0_ = 0, nx_ = 0, ny_ = 0;
-  std::vector<Plane> planes_;
-  std::vector<std::uint8_t> has_plane_;
-};
-
-// Eqs. 19-20 for voxel i of a problem, from its height above the ground height h1: the rough
-// class (true: G1) and the single-site terms
-bool setUnary(GmrfProblem& p, std::size_t i, const Voxel& v, double ground, const GroundSegmentationConfig& cfg) {
-  const double d = v.height - ground;
-  const bool g1 = std::abs(d) <= cfg.delta;
-  const bool in_range = std::abs(d) <= cfg.range_margin;
-  p.unary_ground[i] = (g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha);
-  p.unary_nonground[i] = (g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha);
-  p.parity[i] = static_cast<std::uint8_t>((v.index.x() + v.index.y() + v.index.z()) & 1);
-  return g1;
-}
-
-// the pair-site weight of two neighbouring voxels of heights a and b (Eqs. 21-22)
-double pairWeight(const GroundSegmentationConfig& cfg, float a, float b) {
-  return cfg.beta + cfg.gamma * std::exp(-std::abs(a - b));
-}
-
-// The voxel ids of the map ordered by column (in blocks of 32 x 32 columns) and height, for
-// finding the neighbours of every voxel with short, mostly cache-resident scans instead of one
-// hash-table probe per neighbour.
-class ColumnIndex {
- public:
-  explicit ColumnIndex(const std::vector<Voxel>& voxels) {
-    const std::size_t n = voxels.size();
-    // number the non-empty blocks as they are first met
-    block_.resize(n);
-    std::uint64_t last_key = ~std::uint64_t{0};
-    std::uint32_t last_block = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint64_t k = blockKey(voxels[i].index.x() >> kShift, voxels[i].index.y() >> kShift);
-      if (k != last_key) {
-        last_key = k;
-        last_block = blocks_.try_emplace(k, static_cast<std::uint32_t>(blocks_.size())).first->second;
-      }
-      block_[i] = last_block;
-    }
-    // ids by (block, column), then by z inside each column
-    const std::size_t cells = blocks_.size() * kColumns;
-    start_.assign(cells + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++start_[slot(i, voxels) + 1];
-    for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
-    order_.resize(n);
-    {
-      std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-      for (std::uint32_t i = 0; i < n; ++i) order_[fill[slot(i, voxels)]++] = i;
-    }
-    z_.resize(n);
-    tbb::parallel_for(std::size_t{0}, cells, [&](std::size_t c) {
-      const auto b = order_.begin() + start_[c], e = order_.begin() + start_[c + 1];
-      if (e - b > 1)
-        std::sort(b, e, [&](std::uint32_t a, std::uint32_t d) { return voxels[a].index.z() < voxels[d].index.z(); });
-      for (auto k = start_[c]; k < start_[c + 1]; ++k) z_[k] = voxels[order_[k]].index.z();
-    });
-  }
-
-  // id of the voxel at (x, y, z), or -1; block: the block number of (x, y) if the caller knows it
-  std::int64_t find(int x, int y, int z, std::int64_t block = -1) const {
-    if (block < 0) {
-      const auto it = blocks_.find(blockKey(x >> kShift, y >> kShift));
-      if (it == blocks_.end()) return -1;
-      block = it->second;
-    }
-    const std::size_t c = static_cast<std::size_t>(block) * kColumns + local(x, y);
-    for (auto k = start_[c]; k < start_[c + 1] && z_[k] <= z; ++k) {
-      if (z_[k] == z) return order_[k];
-    }
-    return -1;
-  }
-  // the neighbours at +x, +y, +z of every voxel (-1: none), three per voxel id
-  std::vector<std::int64_t> forwardNeighbours(const std::vector<Voxel>& voxels, int threads) const {
-    std::vector<std::int64_t> next(3 * voxels.size(), -1);
-    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-    arena.execute([&] {
-      tbb::parallel_for(std::size_t{0}, start_.size() - 1, [&](std::size_t c) {
-        for (auto k = start_[c]; k < start_[c + 1]; ++k) {
-          const std::uint32_t i = order_[k];
-          const VoxelIndex& v = voxels[i].index;
-          // +z: the next voxel of the column, if it is right above
-          if (k + 1 < start_[c + 1] && z_[k + 1] == v.z() + 1) next[3 * i + 2] = order_[k + 1];
-          // +x, +y: in the same block unless the column is on its edge
-          constexpr int edge = (1 << kShift) - 1;
-          const std::int64_t b = block_[i];
-          next[3 * i + 0] = find(v.x() + 1, v.y(), v.z(), (v.x() & edge) != edge ? b : -1);
-          next[3 * i + 1] = find(v.x(), v.y() + 1, v.z(), (v.y() & edge) != edge ? b : -1);
+        if (ly + 1 < k_) {
+          linkColumns(p, cfg, b, e, column(t, c + k_), column(t, c + k_ + 1), 1);
+        } else if (north >= 0) {
+          linkColumns(p, cfg, b, e, column(north, lx), column(north, lx + 1), 1);
         }
       });
     });
-    return next;
   }
 
  private:
-  static constexpr int kShift = 5;  // blocks of 32 x 32 columns
-  static constexpr std::size_t kColumns = 1u << (2 * kShift);
-  static std::uint64_t blockKey(int bx, int by) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx)) << 32) | static_cast<std::uint32_t>(by);
+  void setGrid(int x0, int y0, int x1, int y1) {
+    gx0_ = x0, gy0_ = y0, nx_ = x1 - x0 + 1, ny_ = y1 - y0 + 1;
+    grid_.assign(static_cast<std::size_t>(nx_) * ny_, -1);
   }
-  static std::size_t local(int x, int y) {
-    constexpr int mask = (1 << kShift) - 1;
-    return static_cast<std::size_t>((y & mask) << kShift | (x & mask));
-  }
-  std::size_t slot(std::size_t i, const std::vector<Voxel>& voxels) const {
-    return static_cast<std::size_t>(block_[i]) * kColumns + local(voxels[i].index.x(), voxels[i].index.y());
+  std::size_t gridCell(int tx, int ty) const {
+    return static_cast<std::size_t>(ty - gy0_) * nx_ + static_cast<std::size_t>(tx - gx0_);
   }
 
-  std::unordered_map<std::uint64_t, std::uint32_t> blocks_;
-  std::vector<std::uint32_t> block_;  // per voxel id
-  std::vector<std::uint32_t> start_;  // per (block, column): first position in order_
-  std::vector<std::uint32_t> order_;  // voxel ids by block, column, z
-  std::vector<std::int32_t> z_;       // z of order_[k]
+  // orders each tile's voxels (positions first[t] .. first[t + 1]) by column and z
+  void sortColumns(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& first) {
+    const std::size_t kk = static_cast<std::size_t>(k_) * k_;
+    columns_.resize(tiles_.size() * (kk + 1));
+    z_.resize(ids_.size());
+    height_.resize(ids_.size());
+    range_.resize(2 * tiles_.size());
+    tbb::parallel_for(std::size_t{0}, tiles_.size(), [&](std::size_t t) {
+      const int cx = tiles_[t].tx * k_, cy = tiles_[t].ty * k_;
+      std::uint32_t* col = columns_.data() + t * (kk + 1);
+      std::fill(col, col + kk + 1, 0);
+      const std::vector<std::uint32_t> in(ids_.begin() + first[t], ids_.begin() + first[t + 1]);
+      auto local = [&](std::uint32_t i) {
+        return static_cast<std::size_t>(voxels[i].index.y() - cy) * k_ + static_cast<std::size_t>(voxels[i].index.x() - cx);
+      };
+      for (std::uint32_t i : in) ++col[local(i) + 1];
+      col[0] = first[t];
+      for (std::size_t c = 0; c < kk; ++c) col[c + 1] += col[c];
+      std::vector<std::uint32_t> fill(col, col + kk);
+      for (std::uint32_t i : in) ids_[fill[local(i)]++] = i;
+      for (std::size_t c = 0; c < kk; ++c) {
+        // insertion sort by z: a column holds few voxels
+        for (std::uint32_t q = col[c] + 1; q < col[c + 1]; ++q) {
+          const std::uint32_t i = ids_[q];
+          std::uint32_t r = q;
+          for (; r > col[c] && voxels[ids_[r - 1]].index.z() > voxels[i].index.z(); --r) ids_[r] = ids_[r - 1];
+          ids_[r] = i;
+        }
+      }
+      float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+      for (std::uint32_t q = first[t]; q < first[t + 1]; ++q) {
+        z_[q] = voxels[ids_[q]].index.z();
+        height_[q] = voxels[ids_[q]].height;
+        lo = std::min(lo, height_[q]), hi = std::max(hi, height_[q]);
+      }
+      range_[2 * t] = lo, range_[2 * t + 1] = hi;
+    });
+  }
+
+  // links the voxels of column [b, e) to those of the column [nb, ne) next to it along axis
+  // (both sorted by z): a merge
+  void linkColumns(GmrfProblem& p, const GroundSegmentationConfig& cfg, std::uint32_t b, std::uint32_t e,
+                   std::uint32_t nb, std::uint32_t ne, int axis) const {
+    while (b < e && nb < ne) {
+      if (z_[b] < z_[nb]) {
+        ++b;
+      } else if (z_[nb] < z_[b]) {
+        ++nb;
+      } else {
+        p.link(b, axis, nb, pairWeight(cfg, height_[b], height_[nb]));
+        ++b, ++nb;
+      }
+    }
+  }
+
+  int k_ = 1;
+  int gx0_ = 0, gy0_ = 0, nx_ = 0, ny_ = 0;  // the grid of tiles over the layout's extent
+  std::vector<std::int32_t> grid_;            // per grid cell: index in tiles_, or -1
+  std::vector<Tile> tiles_;
+  std::vector<std::uint32_t> columns_;        // k*k + 1 per tile: first position of each column
+  std::vector<std::uint32_t> ids_;            // voxel id per position
+  std::vector<std::int32_t> z_;               // voxel z index per position
+  std::vector<float> height_;                 // voxel height per position [m]
+  std::vector<float> range_;                  // per tile: its lowest and highest voxel height [m]
 };
 
-// the pair terms between neighbours at L1 distance 1 (+x, +y, +z of every voxel), in voxel order:
-// each voxel's slots found by a prefix sum, then filled in parallel, so the edge list does not
-// depend on the thread count
-void addPairTerms(GmrfProblem& p, const std::vector<Voxel>& voxels, const GroundSegmentationConfig& cfg,
-                  tbb::task_arena& arena) {
-  const std::size_t n = voxels.size();
-  const std::vector<std::int64_t> next = ColumnIndex(voxels).forwardNeighbours(voxels, cfg.threads);
-  std::vector<std::uint32_t> first(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    first[i + 1] = first[i] + (next[3 * i] >= 0) + (next[3 * i + 1] >= 0) + (next[3 * i + 2] >= 0);
+// The peak of the histogram of heights above a plane over a set of tiles of a layout: the offset
+// that lifts the plane to the tiles' ground. One pass over the voxels: the residuals' range is
+// bounded beforehand from each tile's lowest and highest voxel and the plane at its corner columns.
+double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& tiles, const Plane& plane, double cell,
+                    double bin_size, PeakHistogram& histogram) {
+  const int k = layout.k();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t t : tiles) {
+    const auto& tile = layout.tiles()[t];
+    const double x0 = (tile.tx * k + 0.5) * cell, y0 = (tile.ty * k + 0.5) * cell, span = (k - 1) * cell;
+    const double corners[4] = {plane.at(x0, y0), plane.at(x0 + span, y0), plane.at(x0, y0 + span),
+                               plane.at(x0 + span, y0 + span)};
+    lo = std::min(lo, layout.lowest(t) - *std::max_element(corners, corners + 4));
+    hi = std::max(hi, layout.highest(t) - *std::min_element(corners, corners + 4));
   }
-  p.edges.resize(first[n]);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      std::uint32_t e = first[i];
-      for (int axis = 0; axis < 3; ++axis) {
-        const std::int64_t k = next[3 * i + axis];
-        if (k < 0) continue;
-        p.edges[e++] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(k),
-                        pairWeight(cfg, voxels[i].height, voxels[k].height)};
-      }
+  histogram.reset(lo, hi, bin_size);
+  for (std::size_t t : tiles) {
+    const auto& tile = layout.tiles()[t];
+    layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
+      const double at = plane.at((tile.tx * k + lx + 0.5) * cell, (tile.ty * k + ly + 0.5) * cell);
+      histogram.add(&layout.height(b), e - b, at);
     });
-  });
+  }
+  return histogram.peak();
 }
 
 }  // namespace
@@ -449,33 +537,73 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
   const std::size_t n = voxels.size();
   SegmentationResult out;
   out.rough.assign(n, 0);
+  out.refined.assign(n, 0);
   out.ground_height.assign(n, 0.0f);
   if (n == 0) return out;
-  const GroundHeight h1(map, cfg);
-  out.tiles = h1.tiles();
   const double cell = map.voxelSize();
-  GmrfProblem p;
-  p.unary_ground.resize(n);
-  p.unary_nonground.resize(n);
-  p.parity.resize(n);
+  const int k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
+  const bool global = cfg.histogram == GroundSegmentationConfig::Histogram::Global;
   tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      const auto& v = voxels[i];
-      const double ground = h1.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
-      out.ground_height[i] = static_cast<float>(ground);
-      out.rough[i] = setUnary(p, i, v, ground, cfg);
+    const TileLayout layout(voxels, k);
+    const std::size_t tiles = layout.tiles().size();
+    // h1: one plane per tile, fitted through the plane-fit candidates of the tiles in its window
+    // and lifted to the peak of the window's heights above it; or one level for the whole map
+    std::vector<Plane> planes(tiles);
+    if (global) {
+      std::vector<double> h(n);
+      for (std::size_t i = 0; i < n; ++i) h[i] = voxels[i].height;
+      planes.assign(tiles, Plane{0, 0, histogramPeak(h, cfg.bin_size)});
+      out.tiles = 1;
+    } else {
+      std::vector<std::vector<Point3>> candidates(tiles);
+      tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
+        std::vector<float> low;
+        layout.columnLows(t, low);
+        candidatesFromLows(low, k, layout.tiles()[t].tx * k, layout.tiles()[t].ty * k, cell, candidates[t]);
+      });
+      tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
+        std::vector<std::size_t> window;
+        std::vector<const std::vector<Point3>*> points;
+        for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+          for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+            const std::int64_t u = layout.tileAt(layout.tiles()[t].tx + dx, layout.tiles()[t].ty + dy);
+            if (u >= 0) window.push_back(static_cast<std::size_t>(u)), points.push_back(&candidates[u]);
+          }
+        }
+        planes[t] = fitPlane(points);
+        PeakHistogram histogram;
+        planes[t].c += residualPeak(layout, window, planes[t], cell, cfg.bin_size, histogram);
+      });
+      out.tiles = static_cast<int>(tiles);
+    }
+    // the problem over positions of the layout
+    GmrfProblem p;
+    p.resize(n);
+    std::vector<std::uint8_t> rough(n);
+    tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
+      const auto& tile = layout.tiles()[t];
+      layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
+        const int x = tile.tx * k + lx, y = tile.ty * k + ly;
+        const double ground = planes[t].at((x + 0.5) * cell, (y + 0.5) * cell);
+        for (auto q = b; q < e; ++q) {
+          rough[q] = setUnary(p, q, layout.height(q), x, y, layout.z(q), ground, cfg);
+          out.ground_height[layout.id(q)] = static_cast<float>(ground);
+          out.rough[layout.id(q)] = rough[q];
+        }
+      });
     });
+    layout.linkNeighbours(p, cfg);
+    std::vector<std::uint8_t> labels = rough;
+    out.energy_rough = gmrfEnergy(p, rough);
+    if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
+      solveMinCut(p, labels);
+    } else {
+      out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
+    }
+    out.energy_refined = gmrfEnergy(p, labels);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) { out.refined[layout.id(q)] = labels[q]; });
   });
-  addPairTerms(p, voxels, cfg, arena);
-  out.refined = out.rough;
-  out.energy_rough = gmrfEnergy(p, out.rough);
-  if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
-    solveMinCut(p, out.refined);
-  } else {
-    out.iterations = solveIcm(p, out.refined, cfg.icm_iterations, cfg.threads);
-  }
-  out.energy_refined = gmrfEnergy(p, out.refined);
   return out;
 }
 
@@ -498,7 +626,7 @@ struct IncrementalGroundSegmentation::State {
     int tx = 0, ty = 0;
     std::vector<std::uint32_t> ids;  // in id order
     std::size_t pending = 0;         // voxels added since it was last re-segmented
-    std::vector<Point3> lowest;      // its plane-fit candidates (tileCandidates)
+    std::vector<Point3> lowest;      // its plane-fit candidates (candidatesFromLows)
     Plane plane;
   };
   std::unordered_map<std::uint64_t, Tile> tiles;
@@ -506,7 +634,6 @@ struct IncrementalGroundSegmentation::State {
   std::size_t taken = 0;  // voxels already placed in tiles
   SegmentationResult result;
   Stats stats;
-  std::vector<std::int32_t> local;  // voxel id -> index in the current subproblem, -1 outside
 
   void setCell(double voxel_size) {
     if (cell == voxel_size) return;
@@ -515,13 +642,19 @@ struct IncrementalGroundSegmentation::State {
   }
   std::pair<int, int> tileOf(const VoxelIndex& i) const { return {floorDiv(i.x(), k), floorDiv(i.y(), k)}; }
 
-  // a tile's plane-fit candidates, as GroundHeight takes them
+  // a tile's plane-fit candidates, as the whole-map segmentation takes them
   void findLowest(Tile& t, const std::vector<Voxel>& voxels) const {
-    tileCandidates(voxels, t.ids.data(), t.ids.size(), k, t.tx * k, t.ty * k, cell, t.lowest);
+    std::vector<float> low(static_cast<std::size_t>(k) * k, std::numeric_limits<float>::infinity());
+    for (std::uint32_t id : t.ids) {
+      const auto& v = voxels[id];
+      float& l = low[static_cast<std::size_t>(v.index.y() - t.ty * k) * k + (v.index.x() - t.tx * k)];
+      l = std::min(l, v.height);
+    }
+    candidatesFromLows(low, k, t.tx * k, t.ty * k, cell, t.lowest);
   }
 
-  // the plane of one tile, as GroundHeight fits it: through the plane-fit candidates of
-  // its window, then raised to the peak of the window's heights above it
+  // the plane of one tile, as the whole-map segmentation fits it: through the plane-fit candidates
+  // of its window, then raised to the peak of the window's heights above it
   Plane windowPlane(const Tile& t, const std::vector<Voxel>& voxels) const {
     std::vector<const Tile*> window;
     for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
@@ -539,13 +672,20 @@ struct IncrementalGroundSegmentation::State {
     Plane plane = fitPlane(candidates);
     std::vector<double> residual;
     residual.reserve(count);
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const Tile* u : window) {
       for (std::uint32_t id : u->ids) {
         const auto& v = voxels[id];
-        residual.push_back(v.height - plane.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell));
+        const double r = v.height - plane.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
+        residual.push_back(r);
+        lo = std::min(lo, r), hi = std::max(hi, r);
       }
     }
-    plane.c += histogramPeak(residual, cfg.bin_size);
+    if (residual.empty()) return plane;
+    PeakHistogram histogram;
+    histogram.reset(lo, hi, cfg.bin_size);
+    for (double r : residual) histogram.add(r);
+    plane.c += histogram.peak();
     return plane;
   }
 };
@@ -601,7 +741,6 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   out.rough.resize(n, 0);
   out.refined.resize(n, 0);
   out.ground_height.resize(n, 0.0f);
-  st.local.resize(n, -1);
   st.stats.touched_tiles = st.touched.size();
   // the tiles whose window reaches a touched tile, in a fixed order
   std::vector<std::uint64_t> keys;
@@ -639,65 +778,61 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
                       [&](std::size_t i) { planes[i] = st.windowPlane(*refit[i], voxels); });
   });
   for (std::size_t i = 0; i < refit.size(); ++i) refit[i]->plane = planes[i];
-  // the subproblem: every voxel of the refitted tiles
-  std::vector<std::uint32_t> ids;
-  std::vector<std::uint32_t> tile_start{0};
-  for (const State::Tile* t : refit) {
-    ids.insert(ids.end(), t->ids.begin(), t->ids.end());
-    tile_start.push_back(static_cast<std::uint32_t>(ids.size()));
-  }
-  const std::size_t m = ids.size();
-  st.stats.voxels = m;
-  for (std::size_t i = 0; i < m; ++i) st.local[ids[i]] = static_cast<std::int32_t>(i);
-  GmrfProblem p;
-  p.unary_ground.resize(m);
-  p.unary_nonground.resize(m);
-  p.parity.resize(m);
-  std::vector<std::uint8_t> rough(m);
-  std::vector<Voxel> sub(m);
+  // the subproblem: every voxel of the refitted tiles, laid out by tile, column and height
+  std::vector<TileLayout::Tile> tiles;
+  std::vector<const std::vector<std::uint32_t>*> tile_ids;
+  for (const State::Tile* t : refit) tiles.push_back({t->tx, t->ty}), tile_ids.push_back(&t->ids);
+  const int k = st.k;
   arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, refit.size(), [&](std::size_t ti) {
-      const State::Tile& tile = *refit[ti];
-      const int tx = tile.tx, ty = tile.ty;
-      for (std::size_t i = tile_start[ti]; i < tile_start[ti + 1]; ++i) {
-        const auto& v = voxels[ids[i]];
-        sub[i] = v;
-        const double ground = tile.plane.at((v.index.x() + 0.5) * st.cell, (v.index.y() + 0.5) * st.cell);
-        out.ground_height[ids[i]] = static_cast<float>(ground);
-        rough[i] = out.rough[ids[i]] = setUnary(p, i, v, ground, cfg);
-        // neighbours outside the subproblem keep their labels: their pair terms become unary terms
-        // (only columns on a tile's edge have neighbours in another tile)
-        const int lx = v.index.x() - tx * st.k, ly = v.index.y() - ty * st.k;
-        for (const VoxelIndex& d4 :
-             {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
-          const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
-          if (l >= 0 && l < st.k) continue;
-          const std::int64_t j = map.find(v.index + d4);
-          if (j < 0 || st.local[j] >= 0) continue;
-          const double w = pairWeight(cfg, v.height, voxels[j].height);
-          const bool ground_j = out.refined[j] != 0;
-          p.unary_ground[i] += ground_j ? -w : w;
-          p.unary_nonground[i] += ground_j ? w : -w;
+    const TileLayout layout(voxels, k, tiles, tile_ids);
+    const std::size_t m = layout.size();
+    st.stats.voxels = m;
+    GmrfProblem p;
+    p.resize(m);
+    std::vector<std::uint8_t> rough(m);
+    tbb::parallel_for(std::size_t{0}, refit.size(), [&](std::size_t t) {
+      const State::Tile& tile = *refit[t];
+      layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
+        const int x = tile.tx * k + lx, y = tile.ty * k + ly;
+        const double ground = tile.plane.at((x + 0.5) * st.cell, (y + 0.5) * st.cell);
+        for (auto q = b; q < e; ++q) {
+          const std::uint32_t id = layout.id(q);
+          const auto& v = voxels[id];
+          out.ground_height[id] = static_cast<float>(ground);
+          rough[q] = out.rough[id] = setUnary(p, q, v.height, x, y, v.index.z(), ground, cfg);
+          // neighbours in tiles outside the subproblem keep their labels: their pair terms become
+          // unary terms (only columns on a tile's edge have neighbours in another tile)
+          for (const VoxelIndex& d4 :
+               {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
+            const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
+            if (l >= 0 && l < k) continue;
+            if (layout.tileAt(tile.tx + d4.x(), tile.ty + d4.y()) >= 0) continue;
+            const std::int64_t j = map.find(v.index + d4);
+            if (j < 0) continue;
+            const float w = pairWeight(cfg, v.height, voxels[j].height);
+            const bool ground_j = out.refined[j] != 0;
+            p.unary_ground[q] += ground_j ? -w : w;
+            p.unary_nonground[q] += ground_j ? w : -w;
+          }
         }
-      }
+      });
     });
+    layout.linkNeighbours(p, cfg);
+    std::vector<std::uint8_t> labels = rough;
+    out.energy_rough = gmrfEnergy(p, rough);
+    if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
+      solveMinCut(p, labels);
+      out.iterations = 0;
+    } else {
+      out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
+    }
+    out.energy_refined = gmrfEnergy(p, labels);
+    out.tiles = static_cast<int>(st.tiles.size());
+    for (std::size_t q = 0; q < m; ++q) {
+      out.refined[layout.id(q)] = labels[q];
+      voxels[layout.id(q)].label = labels[q] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+    }
   });
-  addPairTerms(p, sub, cfg, arena);
-  std::vector<std::uint8_t> labels = rough;
-  out.energy_rough = gmrfEnergy(p, rough);
-  if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
-    solveMinCut(p, labels);
-    out.iterations = 0;
-  } else {
-    out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
-  }
-  out.energy_refined = gmrfEnergy(p, labels);
-  out.tiles = static_cast<int>(st.tiles.size());
-  for (std::size_t i = 0; i < m; ++i) {
-    out.refined[ids[i]] = labels[i];
-    voxels[ids[i]].label = labels[i] ? VoxelLabel::Ground : VoxelLabel::NonGround;
-    st.local[ids[i]] = -1;
-  }
 }
 
 }  // namespace terrain

@@ -55,20 +55,35 @@ bool parseSolver(const std::string& s, GroundSegmentationConfig::Solver& out);
 // peak is refined to the mean of the heights in the peak bin and its two neighbours.
 double histogramPeak(const std::vector<double>& heights, double bin_size);
 
-// The binary energy of the GMRF: unary costs per voxel and label, weighted neighbour pairs.
+// The binary energy of the GMRF: unary costs per node and label, and weighted neighbour pairs.
+// The graph is a grid's: along each of three axes a node has at most one neighbour forward (next)
+// and one backward (prev); the two nodes of a pair differ in parity (red-black colouring), so that
+// ICM can update all nodes of one colour at once. Costs are floats: a 1.8 M-voxel problem is read
+// several times per solve, and half the bytes make it faster.
 struct GmrfProblem {
-  std::vector<double> unary_ground, unary_nonground;  // per node: V1(f) + V1(h|f)
-  struct Edge {
-    std::uint32_t u, v;
-    double weight;  // beta + gamma e^{-|h_u - h_v|}
-  };
-  std::vector<Edge> edges;
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+  std::vector<float> unary_ground, unary_nonground;  // per node: V1(f) + V1(h|f)
+  std::vector<std::uint32_t> next;  // 3 per node: its neighbour forward along each axis, or kNone
+  std::vector<std::uint32_t> prev;  // 3 per node: the node it is the forward neighbour of, or kNone
+  std::vector<float> weight;        // 3 per node: the weight beta + gamma e^{-|h_u - h_v|} of the pair with next
   std::vector<std::uint8_t> parity;  // red-black colour of each node (neighbours differ)
+
+  // n nodes with zero unary costs and no pairs
+  void resize(std::size_t n);
+  std::size_t size() const { return parity.size(); }
+  // makes v the forward neighbour of u along axis (0..2), with the pair's weight
+  void link(std::uint32_t u, int axis, std::uint32_t v, float pair_weight) {
+    next[3 * u + axis] = v;
+    prev[3 * v + axis] = u;
+    weight[3 * u + axis] = pair_weight;
+  }
 };
 
 // Energy U(f|d) of a labelling (true = ground), Eq. 18.
 double gmrfEnergy(const GmrfProblem& problem, const std::vector<std::uint8_t>& ground);
-// ICM from an initial labelling; returns the sweeps used.
+// ICM from an initial labelling; returns the sweeps used. Throws std::invalid_argument if the
+// problem's graph is not a grid's (a node linked forward from two along one axis, or a pair of
+// equal parity).
 int solveIcm(const GmrfProblem& problem, std::vector<std::uint8_t>& ground, int max_iterations, int threads);
 // Exact minimum by s-t min-cut.
 void solveMinCut(const GmrfProblem& problem, std::vector<std::uint8_t>& ground);

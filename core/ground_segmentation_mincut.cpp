@@ -10,7 +10,9 @@ namespace terrain {
 void solveMinCut(const GmrfProblem& p, std::vector<std::uint8_t>& ground) {
   using Graph = maxflow::Graph<double, double, double>;
   const int n = static_cast<int>(ground.size());
-  Graph g(n, static_cast<int>(p.edges.size()));
+  int pairs = 0;
+  for (std::uint32_t u : p.next) pairs += u != GmrfProblem::kNone;
+  Graph g(n, pairs);
   g.add_node(n);
   // source side = ground. A node on the source side cuts its sink link, so the sink capacity is
   // the cost of "ground"; shifting both costs by their minimum keeps capacities non-negative.
@@ -19,7 +21,13 @@ void solveMinCut(const GmrfProblem& p, std::vector<std::uint8_t>& ground) {
     g.add_tweights(v, p.unary_nonground[v] - m, p.unary_ground[v] - m);
   }
   // a pair costs -w when equal and +w when different: 2w more when the cut separates it
-  for (const auto& e : p.edges) g.add_edge(static_cast<int>(e.u), static_cast<int>(e.v), 2 * e.weight, 2 * e.weight);
+  for (int v = 0; v < n; ++v) {
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t u = p.next[3 * v + a];
+      const double w = p.weight[3 * v + a];
+      if (u != GmrfProblem::kNone) g.add_edge(v, static_cast<int>(u), 2 * w, 2 * w);
+    }
+  }
   g.maxflow();
   for (int v = 0; v < n; ++v) ground[v] = g.what_segment(v) == Graph::SOURCE ? 1 : 0;
 }

@@ -59,19 +59,20 @@ TEST(GroundSegmentationTest, GmrfCleansANoisyLabelling) {
     ASSERT_GT(flipped, 100u);
     // unary terms as segmentGround builds them
     const double a = cfg.alpha;
+    p.resize(map.size());
     for (std::size_t i = 0; i < map.size(); ++i) {
       const bool g1 = clean.rough[i];
-      p.unary_ground.push_back(g1 ? -2 * a : 2 * a);
-      p.unary_nonground.push_back(g1 ? 2 * a : -2 * a);
+      p.unary_ground[i] = g1 ? -2 * a : 2 * a;
+      p.unary_nonground[i] = g1 ? 2 * a : -2 * a;
       const auto& idx = map.voxels()[i].index;
-      p.parity.push_back(static_cast<std::uint8_t>((idx.x() + idx.y() + idx.z()) & 1));
+      p.parity[i] = static_cast<std::uint8_t>((idx.x() + idx.y() + idx.z()) & 1);
     }
     for (std::uint32_t i = 0; i < map.size(); ++i) {
       for (int axis = 0; axis < 3; ++axis) {
         VoxelIndex j = map.voxels()[i].index;
         j[axis] += 1;
         const auto k = map.find(j);
-        if (k >= 0) p.edges.push_back({i, static_cast<std::uint32_t>(k), cfg.beta + cfg.gamma});
+        if (k >= 0) p.link(i, axis, static_cast<std::uint32_t>(k), cfg.beta + cfg.gamma);
       }
     }
     std::vector<std::uint8_t> icm = noisy;
@@ -87,13 +88,14 @@ TEST(GroundSegmentationTest, GmrfCleansANoisyLabelling) {
 GmrfProblem randomProblem(int n, std::uint64_t seed) {
   Random rng(seed);
   GmrfProblem p;
+  p.resize(n);
   for (int i = 0; i < n; ++i) {
-    p.unary_ground.push_back(rng.uniform(-2, 2));
-    p.unary_nonground.push_back(rng.uniform(-2, 2));
-    p.parity.push_back(static_cast<std::uint8_t>(i & 1));
+    p.unary_ground[i] = rng.uniform(-2, 2);
+    p.unary_nonground[i] = rng.uniform(-2, 2);
+    p.parity[i] = static_cast<std::uint8_t>(i & 1);
   }
-  for (int i = 0; i + 1 < n; ++i) p.edges.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1), rng.uniform(0.1, 1.5)});
-  for (int i = 0; i + 3 < n; i += 2) p.edges.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 3), rng.uniform(0.1, 1.5)});
+  for (int i = 0; i + 1 < n; ++i) p.link(i, 0, i + 1, rng.uniform(0.1, 1.5));
+  for (int i = 0; i + 3 < n; i += 2) p.link(i, 1, i + 3, rng.uniform(0.1, 1.5));
   return p;
 }
 
