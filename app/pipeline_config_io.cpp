@@ -38,6 +38,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"ground.range_margin", num(c.ground.range_margin)},
       {"ground.tile_size", num(c.ground.tile_size)},
       {"ground.tile_radius", integer(c.ground.tile_radius)},
+      {"ground.histogram_stride", integer(c.ground.histogram_stride)},
       {"ground.alpha", num(c.ground.alpha)},
       {"ground.beta", num(c.ground.beta)},
       {"ground.gamma", num(c.ground.gamma)},
@@ -102,6 +103,8 @@ void validate(const PipelineConfig& c) {
   require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin, "(0, 20] m");
   require(c.ground.tile_size >= 1 && c.ground.tile_size <= 1000, "ground.tile_size", c.ground.tile_size, "[1, 1000] m");
   require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius, "[0, 10]");
+  require(c.ground.histogram_stride >= 1 && c.ground.histogram_stride <= 8, "ground.histogram_stride",
+          c.ground.histogram_stride, "[1, 8]");
   require(c.ground.alpha > 0, "ground.alpha", c.ground.alpha, "> 0");
   require(c.ground.beta > 0, "ground.beta", c.ground.beta, "> 0");
   require(c.ground.gamma > 0, "ground.gamma", c.ground.gamma, "> 0");
@@ -156,7 +159,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
                  {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
                  {"bin_size", c.ground.bin_size}, {"delta", c.ground.delta}, {"range_margin", c.ground.range_margin},
-                 {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius}, {"alpha", c.ground.alpha},
+                 {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius},
+                 {"histogram_stride", c.ground.histogram_stride}, {"alpha", c.ground.alpha},
                  {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations},
                  {"threads", c.ground.threads}, {"defer_share", c.ground.defer_share}};
   j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},

@@ -49,6 +49,11 @@ class PeakHistogram {
     for (std::size_t i = 0; i < n; ++i) add(h[i] - offset, lane = (lane + 1) & (kLanes - 1));
     lane_ = lane;
   }
+  std::int64_t total() const {
+    std::int64_t n = 0;
+    for (std::int32_t c : count_) n += c;
+    return n;
+  }
   // the refined peak [m]; NaN if empty. The lowest bin among equal peaks: ground lies under objects.
   double peak() const {
     int p = 0;
@@ -62,7 +67,8 @@ class PeakHistogram {
       for (int l = 0; l < kLanes; ++l) sum += sum_[kLanes * b + l];
       n += count(b);
     }
-    return n == 0 ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(sum) / kScale / static_cast<double>(n);
+    return n == 0 ? std::numeric_limits<double>::quiet_NaN()
+                  : static_cast<double>(sum) / kScale / static_cast<double>(n);
   }
 
  private:
@@ -89,6 +95,9 @@ class PeakHistogram {
   std::vector<std::int32_t> count_;
   std::vector<std::int64_t> sum_;
 };
+
+// a tile's histogram takes every histogram_stride-th column unless that leaves fewer voxels than this
+constexpr std::int64_t kMinHistogram = 256;
 
 // fixed chunks of nodes, so that sums over them come out the same whatever the thread count
 constexpr std::size_t kChunks = 64;
@@ -197,6 +206,7 @@ struct Plane {
 };
 
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+int floorMod(int a, int b) { return a - floorDiv(a, b) * b; }
 
 // sums of a point set, relative to a reference point near it, for least squares in one pass
 struct Moments {
@@ -250,7 +260,8 @@ Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
   Moments near2;
   for (const auto* part : parts) {
     for (const auto& p : *part) {
-      if (std::abs(p.z() - plane0.at(p.x(), p.y())) < 1.0 && std::abs(p.z() - plane1.at(p.x(), p.y())) < 0.7) near2.add(p, ref);
+      if (std::abs(p.z() - plane0.at(p.x(), p.y())) < 1.0 && std::abs(p.z() - plane1.at(p.x(), p.y())) < 0.7)
+        near2.add(p, ref);
     }
   }
   if (near2.n < 3) return plane1;
@@ -319,7 +330,8 @@ class TileLayout {
     const std::size_t n = voxels.size(), cells = static_cast<std::size_t>(nx_) * ny_;
     std::vector<std::uint32_t> tile(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      tile[i] = static_cast<std::uint32_t>(gridCell(floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)));
+      tile[i] =
+          static_cast<std::uint32_t>(gridCell(floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)));
     });
     std::vector<std::uint32_t> start(cells + 1, 0);
     for (std::size_t i = 0; i < n; ++i) ++start[tile[i] + 1];
@@ -378,13 +390,16 @@ class TileLayout {
   float highest(std::size_t t) const { return range_[2 * t + 1]; }
 
   // calls f(lx, ly, b, e) for every non-empty column of tile t, in row-major order: the column at
-  // (lx, ly) in the tile holds positions b .. e - 1
+  // (lx, ly) in the tile holds positions b .. e - 1. With a stride s > 1, only the columns whose
+  // grid coordinates are both multiples of s.
   template <class F>
-  void forEachColumn(std::size_t t, F&& f) const {
+  void forEachColumn(std::size_t t, F&& f, int s = 1) const {
     const std::uint32_t* col = columns_.data() + t * (k_ * k_ + 1);
-    for (int ly = 0; ly < k_; ++ly) {
-      for (int lx = 0; lx < k_; ++lx, ++col) {
-        if (col[0] != col[1]) f(lx, ly, col[0], col[1]);
+    const int lx0 = floorMod(-tiles_[t].tx * k_, s), ly0 = floorMod(-tiles_[t].ty * k_, s);
+    for (int ly = ly0; ly < k_; ly += s) {
+      for (int lx = lx0; lx < k_; lx += s) {
+        const std::uint32_t* c = col + ly * k_ + lx;
+        if (c[0] != c[1]) f(lx, ly, c[0], c[1]);
       }
     }
   }
@@ -397,10 +412,13 @@ class TileLayout {
     }
   }
 
-  // Links every voxel to its neighbours at +x, +y, +z inside the layout, with their pair weights.
-  void linkNeighbours(GmrfProblem& p, const GroundSegmentationConfig& cfg) const {
-    tbb::parallel_for(std::size_t{0}, tiles_.size(), [&](std::size_t t) {
-      const std::int64_t east = tileAt(tiles_[t].tx + 1, tiles_[t].ty), north = tileAt(tiles_[t].tx, tiles_[t].ty + 1);
+  // Links every voxel of tiles 0 .. count - 1 to its neighbours at +x, +y, +z in those tiles, with
+  // their pair weights.
+  void linkNeighbours(GmrfProblem& p, const GroundSegmentationConfig& cfg, std::size_t count) const {
+    const auto inside = [count](std::int64_t u) { return u >= 0 && static_cast<std::size_t>(u) < count ? u : -1; };
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+      const std::int64_t east = inside(tileAt(tiles_[t].tx + 1, tiles_[t].ty));
+      const std::int64_t north = inside(tileAt(tiles_[t].tx, tiles_[t].ty + 1));
       forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
         for (std::uint32_t q = b; q + 1 < e; ++q) {
           if (z_[q + 1] == z_[q] + 1) p.link(q, 2, q + 1, pairWeight(cfg, height_[q], height_[q + 1]));
@@ -443,7 +461,8 @@ class TileLayout {
       std::fill(col, col + kk + 1, 0);
       const std::vector<std::uint32_t> in(ids_.begin() + first[t], ids_.begin() + first[t + 1]);
       auto local = [&](std::uint32_t i) {
-        return static_cast<std::size_t>(voxels[i].index.y() - cy) * k_ + static_cast<std::size_t>(voxels[i].index.x() - cx);
+        return static_cast<std::size_t>(voxels[i].index.y() - cy) * k_ +
+               static_cast<std::size_t>(voxels[i].index.x() - cx);
       };
       for (std::uint32_t i : in) ++col[local(i) + 1];
       col[0] = first[t];
@@ -487,20 +506,20 @@ class TileLayout {
 
   int k_ = 1;
   int gx0_ = 0, gy0_ = 0, nx_ = 0, ny_ = 0;  // the grid of tiles over the layout's extent
-  std::vector<std::int32_t> grid_;            // per grid cell: index in tiles_, or -1
+  std::vector<std::int32_t> grid_;           // per grid cell: index in tiles_, or -1
   std::vector<Tile> tiles_;
-  std::vector<std::uint32_t> columns_;        // k*k + 1 per tile: first position of each column
-  std::vector<std::uint32_t> ids_;            // voxel id per position
-  std::vector<std::int32_t> z_;               // voxel z index per position
-  std::vector<float> height_;                 // voxel height per position [m]
-  std::vector<float> range_;                  // per tile: its lowest and highest voxel height [m]
+  std::vector<std::uint32_t> columns_;  // k*k + 1 per tile: first position of each column
+  std::vector<std::uint32_t> ids_;      // voxel id per position
+  std::vector<std::int32_t> z_;         // voxel z index per position
+  std::vector<float> height_;           // voxel height per position [m]
+  std::vector<float> range_;            // per tile: its lowest and highest voxel height [m]
 };
 
 // The peak of the histogram of heights above a plane over a set of tiles of a layout: the offset
 // that lifts the plane to the tiles' ground. One pass over the voxels: the residuals' range is
 // bounded beforehand from each tile's lowest and highest voxel and the plane at its corner columns.
-double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& tiles, const Plane& plane, double cell,
-                    double bin_size, PeakHistogram& histogram) {
+double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& tiles, std::size_t centre,
+                    const Plane& plane, double cell, double bin_size, int stride, PeakHistogram& histogram) {
   const int k = layout.k();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t t : tiles) {
@@ -511,15 +530,70 @@ double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& ti
     lo = std::min(lo, layout.lowest(t) - *std::max_element(corners, corners + 4));
     hi = std::max(hi, layout.highest(t) - *std::min_element(corners, corners + 4));
   }
-  histogram.reset(lo, hi, bin_size);
-  for (std::size_t t : tiles) {
-    const auto& tile = layout.tiles()[t];
-    layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
-      const double at = plane.at((tile.tx * k + lx + 0.5) * cell, (tile.ty * k + ly + 0.5) * cell);
-      histogram.add(&layout.height(b), e - b, at);
-    });
+  // every stride-th column each way, or every column if that leaves too few voxels
+  for (const int s : {stride, 1}) {
+    histogram.reset(lo, hi, bin_size);
+    for (std::size_t t : tiles) {
+      const auto& tile = layout.tiles()[t];
+      layout.forEachColumn(
+          t,
+          [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
+            const double at = plane.at((tile.tx * k + lx + 0.5) * cell, (tile.ty * k + ly + 0.5) * cell);
+            histogram.add(&layout.height(b), e - b, at);
+          },
+          t == centre ? 1 : s);
+    }
+    if (histogram.total() >= kMinHistogram) break;
   }
   return histogram.peak();
+}
+
+// The ground planes of tiles 0 .. count - 1 of a layout (h1 as a function of position): each
+// fitted through the plane-fit candidates of the tiles of its window that are in the layout, and
+// lifted to the peak of the window's heights above it. The whole-map and the incremental
+// segmentation both take their planes from here.
+std::vector<Plane> tilePlanes(const TileLayout& layout, std::size_t count, const GroundSegmentationConfig& cfg,
+                              double cell) {
+  const int k = layout.k();
+  const std::size_t tiles = layout.tiles().size();
+  std::vector<std::vector<Point3>> candidates(tiles);
+  tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
+    std::vector<float> low;
+    layout.columnLows(t, low);
+    candidatesFromLows(low, k, layout.tiles()[t].tx * k, layout.tiles()[t].ty * k, cell, candidates[t]);
+  });
+  std::vector<Plane> planes(count);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+    std::vector<std::size_t> window;
+    std::vector<const std::vector<Point3>*> points;
+    for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+      for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+        const std::int64_t u = layout.tileAt(layout.tiles()[t].tx + dx, layout.tiles()[t].ty + dy);
+        if (u >= 0) window.push_back(static_cast<std::size_t>(u)), points.push_back(&candidates[u]);
+      }
+    }
+    planes[t] = fitPlane(points);
+    PeakHistogram histogram;
+    planes[t].c +=
+        residualPeak(layout, window, t, planes[t], cell, cfg.bin_size, std::max(1, cfg.histogram_stride), histogram);
+  });
+  return planes;
+}
+
+// The refined labels G1' of a problem, from its rough labels by the configured solver; sets the
+// result's energies and ICM sweeps.
+std::vector<std::uint8_t> refine(const GmrfProblem& p, const std::vector<std::uint8_t>& rough,
+                                 const GroundSegmentationConfig& cfg, SegmentationResult& out) {
+  std::vector<std::uint8_t> labels = rough;
+  out.energy_rough = gmrfEnergy(p, rough);
+  out.iterations = 0;
+  if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
+    solveMinCut(p, labels);
+  } else {
+    out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
+  }
+  out.energy_refined = gmrfEnergy(p, labels);
+  return labels;
 }
 
 }  // namespace
@@ -549,32 +623,14 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
     const std::size_t tiles = layout.tiles().size();
     // h1: one plane per tile, fitted through the plane-fit candidates of the tiles in its window
     // and lifted to the peak of the window's heights above it; or one level for the whole map
-    std::vector<Plane> planes(tiles);
+    std::vector<Plane> planes;
     if (global) {
       std::vector<double> h(n);
       for (std::size_t i = 0; i < n; ++i) h[i] = voxels[i].height;
       planes.assign(tiles, Plane{0, 0, histogramPeak(h, cfg.bin_size)});
       out.tiles = 1;
     } else {
-      std::vector<std::vector<Point3>> candidates(tiles);
-      tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-        std::vector<float> low;
-        layout.columnLows(t, low);
-        candidatesFromLows(low, k, layout.tiles()[t].tx * k, layout.tiles()[t].ty * k, cell, candidates[t]);
-      });
-      tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-        std::vector<std::size_t> window;
-        std::vector<const std::vector<Point3>*> points;
-        for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-          for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-            const std::int64_t u = layout.tileAt(layout.tiles()[t].tx + dx, layout.tiles()[t].ty + dy);
-            if (u >= 0) window.push_back(static_cast<std::size_t>(u)), points.push_back(&candidates[u]);
-          }
-        }
-        planes[t] = fitPlane(points);
-        PeakHistogram histogram;
-        planes[t].c += residualPeak(layout, window, planes[t], cell, cfg.bin_size, histogram);
-      });
+      planes = tilePlanes(layout, tiles, cfg, cell);
       out.tiles = static_cast<int>(tiles);
     }
     // the problem over positions of the layout
@@ -593,15 +649,8 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
         }
       });
     });
-    layout.linkNeighbours(p, cfg);
-    std::vector<std::uint8_t> labels = rough;
-    out.energy_rough = gmrfEnergy(p, rough);
-    if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
-      solveMinCut(p, labels);
-    } else {
-      out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
-    }
-    out.energy_refined = gmrfEnergy(p, labels);
+    layout.linkNeighbours(p, cfg, tiles);
+    const std::vector<std::uint8_t> labels = refine(p, rough, cfg, out);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) { out.refined[layout.id(q)] = labels[q]; });
   });
   return out;
@@ -626,14 +675,13 @@ struct IncrementalGroundSegmentation::State {
     int tx = 0, ty = 0;
     std::vector<std::uint32_t> ids;  // in id order
     std::size_t pending = 0;         // voxels added since it was last re-segmented
-    std::vector<Point3> lowest;      // its plane-fit candidates (candidatesFromLows)
-    Plane plane;
   };
   std::unordered_map<std::uint64_t, Tile> tiles;
   std::unordered_set<std::uint64_t> touched;
   std::size_t taken = 0;  // voxels already placed in tiles
   SegmentationResult result;
   Stats stats;
+  GmrfProblem problem;  // the last update's subproblem, kept so that its memory is reused
 
   void setCell(double voxel_size) {
     if (cell == voxel_size) return;
@@ -641,53 +689,6 @@ struct IncrementalGroundSegmentation::State {
     k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
   }
   std::pair<int, int> tileOf(const VoxelIndex& i) const { return {floorDiv(i.x(), k), floorDiv(i.y(), k)}; }
-
-  // a tile's plane-fit candidates, as the whole-map segmentation takes them
-  void findLowest(Tile& t, const std::vector<Voxel>& voxels) const {
-    std::vector<float> low(static_cast<std::size_t>(k) * k, std::numeric_limits<float>::infinity());
-    for (std::uint32_t id : t.ids) {
-      const auto& v = voxels[id];
-      float& l = low[static_cast<std::size_t>(v.index.y() - t.ty * k) * k + (v.index.x() - t.tx * k)];
-      l = std::min(l, v.height);
-    }
-    candidatesFromLows(low, k, t.tx * k, t.ty * k, cell, t.lowest);
-  }
-
-  // the plane of one tile, as the whole-map segmentation fits it: through the plane-fit candidates
-  // of its window, then raised to the peak of the window's heights above it
-  Plane windowPlane(const Tile& t, const std::vector<Voxel>& voxels) const {
-    std::vector<const Tile*> window;
-    for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-      for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-        auto it = tiles.find(tileKey(t.tx + dx, t.ty + dy));
-        if (it != tiles.end()) window.push_back(&it->second);
-      }
-    }
-    std::vector<const std::vector<Point3>*> candidates;
-    std::size_t count = 0;
-    for (const Tile* u : window) {
-      candidates.push_back(&u->lowest);
-      count += u->ids.size();
-    }
-    Plane plane = fitPlane(candidates);
-    std::vector<double> residual;
-    residual.reserve(count);
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const Tile* u : window) {
-      for (std::uint32_t id : u->ids) {
-        const auto& v = voxels[id];
-        const double r = v.height - plane.at((v.index.x() + 0.5) * cell, (v.index.y() + 0.5) * cell);
-        residual.push_back(r);
-        lo = std::min(lo, r), hi = std::max(hi, r);
-      }
-    }
-    if (residual.empty()) return plane;
-    PeakHistogram histogram;
-    histogram.reset(lo, hi, cfg.bin_size);
-    for (double r : residual) histogram.add(r);
-    plane.c += histogram.peak();
-    return plane;
-  }
 };
 
 IncrementalGroundSegmentation::IncrementalGroundSegmentation(const GroundSegmentationConfig& config)
@@ -703,13 +704,14 @@ const IncrementalGroundSegmentation::Stats& IncrementalGroundSegmentation::lastS
 void IncrementalGroundSegmentation::touch(const std::vector<Point3>& points, double voxel_size) {
   State& st = *state_;
   st.setCell(voxel_size);
-  std::uint64_t last = ~std::uint64_t{0};
+  std::uint64_t last = 0;
+  bool any = false;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
     const double fx = std::floor(p.x() / st.cell), fy = std::floor(p.y() / st.cell);
     if (std::abs(fx) > 1e9 || std::abs(fy) > 1e9) continue;
     const std::uint64_t key = tileKey(floorDiv(static_cast<int>(fx), st.k), floorDiv(static_cast<int>(fy), st.k));
-    if (key != last) st.touched.insert(key), last = key;
+    if (!any || key != last) st.touched.insert(key), last = key, any = true;
   }
 }
 
@@ -727,14 +729,27 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   st.setCell(map.voxelSize());
   auto& voxels = map.voxels();
   const std::size_t n = voxels.size();
-  // take in the new voxels
+  // take in the new voxels (successive ones mostly fall in one tile)
+  std::uint64_t last_key = 0;
+  State::Tile* last = nullptr;
   for (std::size_t id = st.taken; id < n; ++id) {
     const auto [tx, ty] = st.tileOf(voxels[id].index);
     const std::uint64_t key = tileKey(tx, ty);
-    State::Tile& t = st.tiles[key];
-    if (t.ids.empty()) t.tx = tx, t.ty = ty;
+    if (!last || key != last_key) {
+      last = &st.tiles[key];
+      last_key = key;
+      if (last->ids.empty()) last->tx = tx, last->ty = ty;
+    }
+    State::Tile& t = *last;
+    // a tile is due once its new voxels make up defer_share of its voxels (a share that only
+    // grows as voxels are added)
+    auto due = [&] {
+      return t.pending > 0 && static_cast<double>(t.pending) >= cfg.defer_share * static_cast<double>(t.ids.size());
+    };
+    const bool was_due = due();
     t.ids.push_back(static_cast<std::uint32_t>(id));
-    if (static_cast<double>(++t.pending) >= cfg.defer_share * static_cast<double>(t.ids.size())) st.touched.insert(key);
+    ++t.pending;
+    if (!was_due && due()) st.touched.insert(key);
   }
   st.taken = n;
   SegmentationResult& out = st.result;
@@ -758,58 +773,69 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
     }
     std::sort(keys.begin(), keys.end());
   }
-  std::vector<State::Tile*> touched;
   for (std::uint64_t key : st.touched) {
     auto it = st.tiles.find(key);
-    if (it != st.tiles.end()) touched.push_back(&it->second), it->second.pending = 0;
+    if (it != st.tiles.end()) it->second.pending = 0;
   }
   st.touched.clear();
   st.stats.refitted_tiles = keys.size();
   if (keys.empty()) return;
-  std::vector<State::Tile*> refit;
-  for (std::uint64_t key : keys) refit.push_back(&st.tiles.at(key));
-  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, touched.size(), [&](std::size_t i) { st.findLowest(*touched[i], voxels); });
-  });
-  std::vector<Plane> planes(refit.size());
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, refit.size(),
-                      [&](std::size_t i) { planes[i] = st.windowPlane(*refit[i], voxels); });
-  });
-  for (std::size_t i = 0; i < refit.size(); ++i) refit[i]->plane = planes[i];
-  // the subproblem: every voxel of the refitted tiles, laid out by tile, column and height
+  // the tiles to refit, then the other tiles of their windows: their voxels enter the planes
+  std::vector<std::uint64_t> context;
+  {
+    std::unordered_set<std::uint64_t> seen(keys.begin(), keys.end());
+    for (std::uint64_t key : keys) {
+      const State::Tile& t = st.tiles.at(key);
+      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+          const std::uint64_t u = tileKey(t.tx + dx, t.ty + dy);
+          if (st.tiles.count(u) && seen.insert(u).second) context.push_back(u);
+        }
+      }
+    }
+    std::sort(context.begin(), context.end());
+  }
   std::vector<TileLayout::Tile> tiles;
   std::vector<const std::vector<std::uint32_t>*> tile_ids;
-  for (const State::Tile* t : refit) tiles.push_back({t->tx, t->ty}), tile_ids.push_back(&t->ids);
+  for (const auto* list : {&keys, &context}) {
+    for (std::uint64_t key : *list) {
+      const State::Tile& t = st.tiles.at(key);
+      tiles.push_back({t.tx, t.ty}), tile_ids.push_back(&t.ids);
+    }
+  }
+  const std::size_t count = keys.size();
   const int k = st.k;
+  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     const TileLayout layout(voxels, k, tiles, tile_ids);
-    const std::size_t m = layout.size();
+    const std::vector<Plane> planes = tilePlanes(layout, count, cfg, st.cell);
+    // the subproblem: every voxel of the refitted tiles, the first positions of the layout
+    const std::size_t m = count < tiles.size() ? layout.column(count, 0) : layout.size();
     st.stats.voxels = m;
-    GmrfProblem p;
+    GmrfProblem& p = st.problem;
     p.resize(m);
     std::vector<std::uint8_t> rough(m);
-    tbb::parallel_for(std::size_t{0}, refit.size(), [&](std::size_t t) {
-      const State::Tile& tile = *refit[t];
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+      const TileLayout::Tile& tile = tiles[t];
       layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
         const int x = tile.tx * k + lx, y = tile.ty * k + ly;
-        const double ground = tile.plane.at((x + 0.5) * st.cell, (y + 0.5) * st.cell);
+        const double ground = planes[t].at((x + 0.5) * st.cell, (y + 0.5) * st.cell);
         for (auto q = b; q < e; ++q) {
           const std::uint32_t id = layout.id(q);
-          const auto& v = voxels[id];
+          const float h = layout.height(q);
           out.ground_height[id] = static_cast<float>(ground);
-          rough[q] = out.rough[id] = setUnary(p, q, v.height, x, y, v.index.z(), ground, cfg);
+          rough[q] = out.rough[id] = setUnary(p, q, h, x, y, layout.z(q), ground, cfg);
           // neighbours in tiles outside the subproblem keep their labels: their pair terms become
           // unary terms (only columns on a tile's edge have neighbours in another tile)
           for (const VoxelIndex& d4 :
                {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
             const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
             if (l >= 0 && l < k) continue;
-            if (layout.tileAt(tile.tx + d4.x(), tile.ty + d4.y()) >= 0) continue;
-            const std::int64_t j = map.find(v.index + d4);
+            const std::int64_t u = layout.tileAt(tile.tx + d4.x(), tile.ty + d4.y());
+            if (u >= 0 && static_cast<std::size_t>(u) < count) continue;
+            const std::int64_t j = map.find(VoxelIndex(x, y, layout.z(q)) + d4);
             if (j < 0) continue;
-            const float w = pairWeight(cfg, v.height, voxels[j].height);
+            const float w = pairWeight(cfg, h, voxels[j].height);
             const bool ground_j = out.refined[j] != 0;
             p.unary_ground[q] += ground_j ? -w : w;
             p.unary_nonground[q] += ground_j ? w : -w;
@@ -817,16 +843,8 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
         }
       });
     });
-    layout.linkNeighbours(p, cfg);
-    std::vector<std::uint8_t> labels = rough;
-    out.energy_rough = gmrfEnergy(p, rough);
-    if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
-      solveMinCut(p, labels);
-      out.iterations = 0;
-    } else {
-      out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
-    }
-    out.energy_refined = gmrfEnergy(p, labels);
+    layout.linkNeighbours(p, cfg, count);
+    const std::vector<std::uint8_t> labels = refine(p, rough, cfg, out);
     out.tiles = static_cast<int>(st.tiles.size());
     for (std::size_t q = 0; q < m; ++q) {
       out.refined[layout.id(q)] = labels[q];

@@ -272,5 +272,27 @@ TEST(IncrementalGroundSegmentationTest, DeferredTilesWaitForTheirShareOfNewVoxel
   }
 }
 
+// The tile at (-1, -1), whose packed key has every bit set, is taken in and touched like any other.
+TEST(IncrementalGroundSegmentationTest, TheTileSouthWestOfTheOriginIsSegmented) {
+  std::vector<Point3> ground;
+  for (int i = 0; i < 30; ++i) {
+    for (int j = 0; j < 30; ++j) ground.emplace_back(-5.9 + 0.2 * i, -5.9 + 0.2 * j, 0.0);
+  }
+  VoxelMap map(VoxelMapConfig{0.2});
+  IncrementalGroundSegmentation inc(GroundSegmentationConfig{});
+  map.insert(ground, 0);
+  inc.touch(ground, map.voxelSize());
+  inc.update(map);
+  EXPECT_EQ(inc.lastStats().touched_tiles, 1u);
+  EXPECT_EQ(inc.lastStats().voxels, 900u);
+  EXPECT_EQ(map.voxels()[0].label, VoxelLabel::Ground);
+  // the same points again: no new voxel, but the tile's heights changed, so it is re-segmented
+  map.insert(ground, 1);
+  inc.touch(ground, map.voxelSize());
+  inc.update(map);
+  EXPECT_EQ(inc.lastStats().touched_tiles, 1u);
+  EXPECT_EQ(inc.lastStats().voxels, 900u);
+}
+
 }  // namespace
 }  // namespace terrain
