@@ -214,6 +214,27 @@ TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentation) {
   }
 }
 
+// the whole-map segmentation, every stage parallel over tiles or nodes, with either solver
+TEST(GroundSegmentationTest, SameResultWhateverTheThreadCount) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  for (const auto& strip : strips()) map.insert(strip, 0);
+  for (const auto solver : {GroundSegmentationConfig::Solver::Icm, GroundSegmentationConfig::Solver::MinCut}) {
+    SegmentationResult r[2];
+    for (int threads : {1, 2}) {
+      GroundSegmentationConfig cfg;
+      cfg.solver = solver;
+      cfg.threads = threads;
+      r[threads - 1] = segmentGroundLabels(map, cfg);
+    }
+    EXPECT_EQ(r[0].rough, r[1].rough);
+    EXPECT_EQ(r[0].refined, r[1].refined);
+    EXPECT_EQ(r[0].ground_height, r[1].ground_height);
+    EXPECT_EQ(r[0].energy_rough, r[1].energy_rough);
+    EXPECT_EQ(r[0].energy_refined, r[1].energy_refined);
+    EXPECT_LT(r[0].energy_refined, r[0].energy_rough);
+  }
+}
+
 TEST(IncrementalGroundSegmentationTest, SameLabelsWhateverTheThreadCount) {
   std::vector<std::uint8_t> labels[2];
   for (int threads : {1, 2}) {
