@@ -29,16 +29,18 @@ namespace {
 
 // A histogram of heights in bins of bin_size whose edges are whole multiples of it, and its peak
 // refined to the mean of the heights in the peak bin and its two neighbours. Counts and sums are
-// kept in integers (heights in 2^-20 m), so the peak does not depend on the order in which heights
-// are added: the whole-map and the incremental segmentation, which visit a tile's voxels in
+// kept in integers (heights above the lowest in 2^-20 m), so the peak does not depend on the order
+// in which heights are added: the whole-map and the incremental segmentation, which visit a tile's voxels in
 // different orders, agree to the bit.
 class PeakHistogram {
  public:
-  // empties the histogram for heights in [lo, hi] [m] (a height outside falls in the end bin)
+  // empties the histogram for heights in [lo, hi] [m] (a height outside falls in the end bin, as
+  // do heights past 2^20 bins above lo)
   void reset(double lo, double hi, double bin_size) {
     inv_ = 1.0 / bin_size;
+    base_ = lo;
     first_ = floorInt(lo * inv_) - 1;
-    bins_ = std::max(1, floorInt(hi * inv_) - first_ + 2);
+    bins_ = std::clamp(floorInt(hi * inv_) - first_ + 2, 1, 1 << 20);
     count_.assign(kLanes * bins_, 0);
     sum_.assign(kLanes * bins_, 0);
   }
@@ -68,13 +70,15 @@ class PeakHistogram {
       n += count(b);
     }
     return n == 0 ? std::numeric_limits<double>::quiet_NaN()
-                  : static_cast<double>(sum) / kScale / static_cast<double>(n);
+                  : base_ + static_cast<double>(sum) / kScale / static_cast<double>(n);
   }
 
  private:
   static constexpr int kLanes = 4;
   static constexpr double kScale = 1048576.0;
+  // floor(x) as an int, x clamped to +-2^30 (and NaN taken as 0)
   static int floorInt(double x) {
+    x = x > -1073741824.0 ? (x < 1073741824.0 ? x : 1073741824.0) : (x <= -1073741824.0 ? -1073741824.0 : 0.0);
     const int t = static_cast<int>(x);
     return t - (x < t);
   }
@@ -83,14 +87,14 @@ class PeakHistogram {
   void add(double h, int lane) {
     const int b = std::clamp(floorInt(h * inv_) - first_, 0, bins_ - 1);
     ++count_[kLanes * b + lane];
-    sum_[kLanes * b + lane] += static_cast<std::int64_t>(h * kScale);
+    sum_[kLanes * b + lane] += static_cast<std::int64_t>((h - base_) * kScale);
   }
   std::int64_t count(int b) const {
     std::int64_t c = 0;
     for (int l = 0; l < kLanes; ++l) c += count_[kLanes * b + l];
     return c;
   }
-  double inv_ = 10;
+  double inv_ = 10, base_ = 0;
   int first_ = 0, bins_ = 0, lane_ = 0;
   std::vector<std::int32_t> count_;
   std::vector<std::int64_t> sum_;
