@@ -329,31 +329,13 @@ class TileLayout {
       x0 = std::min(x0, v.index.x()), x1 = std::max(x1, v.index.x());
       y0 = std::min(y0, v.index.y()), y1 = std::max(y1, v.index.y());
     }
-    setGrid(floorDiv(x0, k), floorDiv(y0, k), floorDiv(x1, k), floorDiv(y1, k));
-    // voxel ids grouped by tile (counting sort, in id order inside a tile)
-    const std::size_t n = voxels.size(), cells = static_cast<std::size_t>(nx_) * ny_;
-    std::vector<std::uint32_t> tile(n);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      tile[i] =
-          static_cast<std::uint32_t>(gridCell(floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)));
-    });
-    std::vector<std::uint32_t> start(cells + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++start[tile[i] + 1];
-    for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
-    ids_.resize(n);
-    {
-      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-      for (std::uint32_t i = 0; i < n; ++i) ids_[fill[tile[i]]++] = i;
+    const std::size_t n = voxels.size();
+    setGrid(floorDiv(x0, k), floorDiv(y0, k), floorDiv(x1, k), floorDiv(y1, k), n);
+    if (!grid_.empty()) {
+      groupDense(voxels);
+    } else {
+      groupSparse(voxels);
     }
-    std::vector<std::uint32_t> first;
-    for (std::size_t c = 0; c < cells; ++c) {
-      if (start[c] == start[c + 1]) continue;
-      grid_[c] = static_cast<std::int32_t>(tiles_.size());
-      tiles_.push_back({static_cast<int>(c % nx_) + gx0_, static_cast<int>(c / nx_) + gy0_});
-      first.push_back(start[c]);
-    }
-    first.push_back(static_cast<std::uint32_t>(n));
-    sortColumns(voxels, first);
   }
 
   // The voxels of the given tiles (tile coordinates and voxel ids), in that order.
@@ -366,10 +348,10 @@ class TileLayout {
       x0 = std::min(x0, t.tx), x1 = std::max(x1, t.tx);
       y0 = std::min(y0, t.ty), y1 = std::max(y1, t.ty);
     }
-    setGrid(x0, y0, x1, y1);
+    setGrid(x0, y0, x1, y1, tiles.size());
     std::vector<std::uint32_t> first{0};
     for (std::size_t t = 0; t < tiles.size(); ++t) {
-      grid_[gridCell(tiles[t].tx, tiles[t].ty)] = static_cast<std::int32_t>(t);
+      setTile(gridCell(tiles[t].tx, tiles[t].ty), t);
       ids_.insert(ids_.end(), ids[t]->begin(), ids[t]->end());
       first.push_back(static_cast<std::uint32_t>(ids_.size()));
     }
@@ -382,8 +364,11 @@ class TileLayout {
   // index in tiles() of the tile at (tx, ty), or -1 if it is not in the layout
   std::int64_t tileAt(int tx, int ty) const {
     if (tx < gx0_ || ty < gy0_ || tx >= gx0_ + nx_ || ty >= gy0_ + ny_) return -1;
-    return grid_[gridCell(tx, ty)];
+    if (!grid_.empty()) return grid_[gridCell(tx, ty)];
+    const auto it = sparse_.find(gridCell(tx, ty));
+    return it == sparse_.end() ? -1 : it->second;
   }
+
   // first position of column c (row-major, 0..k*k) of tile t; column k*k is the tile's end
   std::uint32_t column(std::size_t t, std::size_t c) const { return columns_[t * (k_ * k_ + 1) + c]; }
   std::uint32_t id(std::size_t pos) const { return ids_[pos]; }
@@ -444,12 +429,76 @@ class TileLayout {
   }
 
  private:
-  void setGrid(int x0, int y0, int x1, int y1) {
-    gx0_ = x0, gy0_ = y0, nx_ = x1 - x0 + 1, ny_ = y1 - y0 + 1;
-    grid_.assign(static_cast<std::size_t>(nx_) * ny_, -1);
+  // voxel ids grouped by tile through a grid over the map's extent (counting sort, in id order
+  // inside a tile)
+  void groupDense(const std::vector<Voxel>& voxels) {
+    const std::size_t n = voxels.size(), cells = grid_.size();
+    std::vector<std::uint32_t> tile(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      tile[i] =
+          static_cast<std::uint32_t>(gridCell(floorDiv(voxels[i].index.x(), k_), floorDiv(voxels[i].index.y(), k_)));
+    });
+    std::vector<std::uint32_t> start(cells + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[tile[i] + 1];
+    for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    ids_.resize(n);
+    {
+      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+      for (std::uint32_t i = 0; i < n; ++i) ids_[fill[tile[i]]++] = i;
+    }
+    std::vector<std::uint32_t> first;
+    for (std::size_t c = 0; c < cells; ++c) {
+      if (start[c] == start[c + 1]) continue;
+      grid_[c] = static_cast<std::int32_t>(tiles_.size());
+      tiles_.push_back({static_cast<int>(c % nx_) + gx0_, static_cast<int>(c / nx_) + gy0_});
+      first.push_back(start[c]);
+    }
+    first.push_back(static_cast<std::uint32_t>(n));
+    sortColumns(voxels, first);
   }
-  std::size_t gridCell(int tx, int ty) const {
-    return static_cast<std::size_t>(ty - gy0_) * nx_ + static_cast<std::size_t>(tx - gx0_);
+
+  // the same, in the same tile order, by sorting the voxels' grid cells: for maps whose extent
+  // holds far more tiles than voxels (a few returns far from the rest)
+  void groupSparse(const std::vector<Voxel>& voxels) {
+    const std::size_t n = voxels.size();
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      keyed[i] = {gridCell(floorDiv(voxels[i].index.x(), k_), floorDiv(voxels[i].index.y(), k_)),
+                  static_cast<std::uint32_t>(i)};
+    });
+    std::sort(keyed.begin(), keyed.end());
+    ids_.resize(n);
+    std::vector<std::uint32_t> first;
+    for (std::size_t j = 0; j < n; ++j) {
+      ids_[j] = keyed[j].second;
+      if (j > 0 && keyed[j].first == keyed[j - 1].first) continue;
+      const std::uint64_t c = keyed[j].first;
+      setTile(c, tiles_.size());
+      tiles_.push_back({static_cast<int>(c % nx_) + gx0_, static_cast<int>(c / nx_) + gy0_});
+      first.push_back(static_cast<std::uint32_t>(j));
+    }
+    first.push_back(static_cast<std::uint32_t>(n));
+    sortColumns(voxels, first);
+  }
+
+  // the tile grid over [x0, x1] x [y0, y1]: dense unless it would hold far more cells than the
+  // count of voxels or tiles going into it
+  void setGrid(int x0, int y0, int x1, int y1, std::size_t count) {
+    gx0_ = x0, gy0_ = y0, nx_ = x1 - x0 + 1, ny_ = y1 - y0 + 1;
+    const std::uint64_t cells = static_cast<std::uint64_t>(nx_) * static_cast<std::uint64_t>(ny_);
+    if (cells <= std::max<std::uint64_t>(std::uint64_t{1} << 20, 8 * static_cast<std::uint64_t>(count)))
+      grid_.assign(cells, -1);
+  }
+  std::uint64_t gridCell(int tx, int ty) const {
+    return static_cast<std::uint64_t>(ty - gy0_) * static_cast<std::uint64_t>(nx_) +
+           static_cast<std::uint64_t>(tx - gx0_);
+  }
+  void setTile(std::uint64_t cell, std::size_t t) {
+    if (!grid_.empty()) {
+      grid_[cell] = static_cast<std::int32_t>(t);
+    } else {
+      sparse_[cell] = static_cast<std::int32_t>(t);
+    }
   }
 
   // orders each tile's voxels (positions first[t] .. first[t + 1]) by column and z
@@ -509,8 +558,9 @@ class TileLayout {
   }
 
   int k_ = 1;
-  int gx0_ = 0, gy0_ = 0, nx_ = 0, ny_ = 0;  // the grid of tiles over the layout's extent
-  std::vector<std::int32_t> grid_;           // per grid cell: index in tiles_, or -1
+  int gx0_ = 0, gy0_ = 0, nx_ = 0, ny_ = 0;                 // the grid of tiles over the layout's extent
+  std::vector<std::int32_t> grid_;                          // per grid cell: index in tiles_, or -1 (empty if sparse)
+  std::unordered_map<std::uint64_t, std::int32_t> sparse_;  // grid cell -> index in tiles_, if sparse
   std::vector<Tile> tiles_;
   std::vector<std::uint32_t> columns_;  // k*k + 1 per tile: first position of each column
   std::vector<std::uint32_t> ids_;      // voxel id per position

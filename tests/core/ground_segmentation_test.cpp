@@ -44,7 +44,8 @@ TEST(GroundSegmentationTest, GmrfCleansANoisyLabelling) {
   // ground, inside the +-delta band) is ambiguous and not scored
   auto scored = [&](std::size_t i) { return map.voxels()[i].index.z() != 1; };
   std::size_t wrong_clean = 0;
-  for (std::size_t i = 0; i < map.size(); ++i) wrong_clean += scored(i) && clean.refined[i] != (map.voxels()[i].index.z() == 0);
+  for (std::size_t i = 0; i < map.size(); ++i)
+    wrong_clean += scored(i) && clean.refined[i] != (map.voxels()[i].index.z() == 0);
   EXPECT_EQ(wrong_clean, 0u);
   // flip 10 % of the rough labels: the refinement must undo nearly all of it
   GmrfProblem p;
@@ -145,7 +146,8 @@ TEST(GroundSegmentationTest, LocalHistogramFollowsASlope) {
     std::size_t right = 0;
     for (std::size_t i = 0; i < map.size(); ++i) {
       const auto& v = map.voxels()[i];
-      const bool truth = v.height < slope * ((v.index.x() + 0.5) * 0.2) + 0.15 || std::abs(v.index.x() * 0.2 + 0.1 - 5.1) > 0.15;
+      const bool truth =
+          v.height < slope * ((v.index.x() + 0.5) * 0.2) + 0.15 || std::abs(v.index.x() * 0.2 + 0.1 - 5.1) > 0.15;
       right += (r.refined[i] != 0) == truth;
     }
     return static_cast<double>(right) / map.size();
@@ -291,6 +293,35 @@ TEST(IncrementalGroundSegmentationTest, DeferredTilesWaitForTheirShareOfNewVoxel
     EXPECT_EQ(map.voxels()[first_box].label, VoxelLabel::NonGround) << share;
     EXPECT_EQ(map.voxels()[0].label, VoxelLabel::Ground) << share;
   }
+}
+
+// Two patches of flat ground 150 km apart (a GPS jump, say): the map's extent holds 6e8 tiles of
+// which two are occupied; both whole-map and incremental segmentation label them without a grid
+// over the whole extent.
+TEST(IncrementalGroundSegmentationTest, PatchesFarApartAreSegmentedWithoutAGridOverTheExtent) {
+  std::vector<Point3> ground;
+  for (const double offset : {0.0, 150000.0}) {
+    for (int i = 0; i < 30; ++i) {
+      for (int j = 0; j < 30; ++j)
+        ground.emplace_back(offset + 0.1 + 0.2 * i, offset + 0.1 + 0.2 * j, 0.05 * (offset > 0));
+    }
+  }
+  VoxelMap map(VoxelMapConfig{0.2});
+  map.insert(ground, 0);
+  ASSERT_EQ(map.size(), 1800u);
+  const SegmentationResult whole = segmentGroundLabels(map, GroundSegmentationConfig{});
+  EXPECT_EQ(whole.tiles, 2);
+  IncrementalGroundSegmentation inc(GroundSegmentationConfig{});
+  inc.touch(ground, map.voxelSize());
+  inc.update(map);
+  EXPECT_EQ(inc.lastStats().refitted_tiles, 2u);
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    EXPECT_EQ(whole.refined[i], 1) << i;
+    EXPECT_EQ(inc.result().refined[i], 1) << i;
+    EXPECT_EQ(inc.result().ground_height[i], whole.ground_height[i]) << i;
+  }
+  EXPECT_NEAR(whole.ground_height[0], 0.0, 1e-6);
+  EXPECT_NEAR(whole.ground_height[900], 0.05, 1e-6);
 }
 
 // The tile at (-1, -1), whose packed key has every bit set, is taken in and touched like any other.
