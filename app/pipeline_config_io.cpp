@@ -24,6 +24,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"pose.level_min_range", num(c.pose.level_min_range)},
       {"pose.level_max_range", num(c.pose.level_max_range)},
       {"pose.level_pitch_sigma", num(c.pose.level_pitch_sigma)},
+      {"pose.max_speed", num(c.pose.max_speed)},
       {"voxel_map.voxel_size", num(c.voxel_map.voxel_size)},
       {"ground.histogram",
        [&c](const YAML::Node& n) {
@@ -96,6 +97,7 @@ void validate(const PipelineConfig& c) {
   require(c.voxel_map.voxel_size >= 0.02 && c.voxel_map.voxel_size <= 5, "voxel_map.voxel_size", c.voxel_map.voxel_size, "[0.02, 5] m");
   require(c.segment_every >= 1, "segment_every", c.segment_every, ">= 1");
   require(c.pose.heading_baseline > 0 && c.pose.heading_baseline <= 100, "pose.heading_baseline", c.pose.heading_baseline, "(0, 100] m");
+  require(c.pose.max_speed > 0 && c.pose.max_speed <= 1000, "pose.max_speed", c.pose.max_speed, "(0, 1000] m/s");
   require(c.pose.level_pitch_sigma > 0 && c.pose.level_pitch_sigma <= 1, "pose.level_pitch_sigma", c.pose.level_pitch_sigma,
           "(0, 1] rad");
   require(c.ground.bin_size > 0 && c.ground.bin_size <= 5, "ground.bin_size", c.ground.bin_size, "(0, 5] m");
@@ -154,7 +156,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   nlohmann::json j;
   j["segment_every"] = c.segment_every;
   j["pose"] = {{"heading_baseline", c.pose.heading_baseline}, {"level_min_range", c.pose.level_min_range},
-               {"level_max_range", c.pose.level_max_range}, {"level_pitch_sigma", c.pose.level_pitch_sigma}};
+               {"level_max_range", c.pose.level_max_range}, {"level_pitch_sigma", c.pose.level_pitch_sigma},
+               {"max_speed", c.pose.max_speed}};
   j["voxel_map"] = {{"voxel_size", c.voxel_map.voxel_size}};
   j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
                  {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},

@@ -48,7 +48,12 @@ void Pipeline::process(const SensorFrame& frame) {
   if (frame.gyro.empty()) warn(id + "no gyro samples");
   if (!frame.image) warn(id + "no camera image");
   const auto t0 = Clock::now();
-  poses_.add(frame);
+  if (const std::size_t jumps = poses_.add(frame); jumps > 0) {
+    std::ostringstream m;
+    m << id << jumps << " GPS fix(es) dropped: farther from the previous fix than " << config_.pose.max_speed
+      << " m/s allows";
+    warn(m.str());
+  }
   const double pose_ms = msSince(t0);
   held_.push_back({frame, pose_ms});
   if (!poses_.ready()) return;

@@ -56,7 +56,7 @@ void PoseEstimator::levelFromSweep(const LidarSweep& sweep) {
   levelled_ = true;
 }
 
-void PoseEstimator::add(const SensorFrame& frame) {
+std::size_t PoseEstimator::add(const SensorFrame& frame) {
   if (!levelled_) levelFromSweep(frame.sweep);
   // integrate the gyro: each sample is the mean rate over the preceding period
   if (rotations_.empty()) {
@@ -72,16 +72,30 @@ void PoseEstimator::add(const SensorFrame& frame) {
   }
   // GPS: antenna positions; new fixes change the smoothed values within one window before them
   const std::size_t first_new = raw_.size();
+  std::size_t jumps = 0;
+  auto sigma = [](double s) { return std::isfinite(s) && s > 0 ? s : 0.0; };
   for (const auto& f : frame.gps) {
     if (!std::isfinite(f.latitude_deg) || !std::isfinite(f.longitude_deg) || !std::isfinite(f.altitude_m)) continue;
     if (!raw_.empty() && f.time <= raw_.back().first) continue;
-    raw_.emplace_back(f.time, gpsToWorld(f));
+    const Vector3 at = gpsToWorld(f);
+    // a jump no vehicle makes: a glitch, dropped (else one bad fix would stretch the map over kilometres)
+    if (!raw_.empty()) {
+      const double allowed =
+          config_.max_speed * (f.time - raw_.back().first) + 3 * (last_sigma_ + sigma(f.sigma_m)) + 1;
+      if ((at - raw_.back().second).norm() > allowed) {
+        ++jumps;
+        continue;
+      }
+    }
+    raw_.emplace_back(f.time, at);
+    last_sigma_ = sigma(f.sigma_m);
   }
   if (raw_.size() > first_new) smoothFrom(first_new);
   if (!heading_known_ && antenna_.size() >= 2 &&
       (antenna_.back().second - antenna_.front().second).head<2>().norm() >= config_.heading_baseline) {
     heading_known_ = alignment(initial_, config_.heading_baseline);
   }
+  return jumps;
 }
 
 bool PoseEstimator::settle(double min_travel) {

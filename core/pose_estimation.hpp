@@ -32,13 +32,15 @@
 namespace terrain {
 
 struct PoseConfig {
-  double heading_baseline = 6.0;     // [m] GPS travel needed to fix the initial heading and pitch
-  double level_min_range = 3.0;      // [m] ground points for the initial roll/pitch: horizontal range from
-  double level_max_range = 15.0;     // [m] ... to
-  double level_cell = 1.0;           // [m] lowest point per cell of this size enters the plane fit
-  double smoothing_window = 1.5;     // [s] half-width of the GPS smoothing window (0: raw fixes)
-  double level_pitch_sigma = 0.05;   // [rad] how far the ground under the robot may tilt from level
-                                     // (about 3 degrees): weighs the ground plane's pitch against the GPS's
+  double heading_baseline = 6.0;    // [m] GPS travel needed to fix the initial heading and pitch
+  double level_min_range = 3.0;     // [m] ground points for the initial roll/pitch: horizontal range from
+  double level_max_range = 15.0;    // [m] ... to
+  double level_cell = 1.0;          // [m] lowest point per cell of this size enters the plane fit
+  double smoothing_window = 1.5;    // [s] half-width of the GPS smoothing window (0: raw fixes)
+  double level_pitch_sigma = 0.05;  // [rad] how far the ground under the robot may tilt from level
+                                    // (about 3 degrees): weighs the ground plane's pitch against the GPS's
+  double max_speed = 40.0;          // [m/s] a GPS fix farther from the last one kept than this speed
+                                    // allows (plus 3 sigma of each fix and 1 m) is dropped as a glitch
 };
 
 struct TimedRotation {
@@ -51,7 +53,8 @@ class PoseEstimator {
   PoseEstimator(const RigCalibration& calibration, const PoseConfig& config);
 
   // Feeds a frame's GPS fixes and gyro samples (and, for the first frame, its sweep for levelling).
-  void add(const SensorFrame& frame);
+  // Returns how many of its GPS fixes were dropped as jumps no vehicle makes (PoseConfig::max_speed).
+  std::size_t add(const SensorFrame& frame);
   // True once the initial attitude is known; poses are valid from then on.
   bool ready() const { return heading_known_; }
   // At the end of the data: fixes the initial attitude from however far the robot has moved, if at
@@ -78,12 +81,13 @@ class PoseEstimator {
   bool levelled_ = false;
   bool heading_known_ = false;
 
-  Vector3 ground_up_ = Vector3::UnitZ();       // ground normal seen in the vehicle frame, first sweep
-  std::vector<TimedRotation> rotations_;       // gyro integral from the identity at the first sample
+  Vector3 ground_up_ = Vector3::UnitZ();     // ground normal seen in the vehicle frame, first sweep
+  std::vector<TimedRotation> rotations_;     // gyro integral from the identity at the first sample
   Rotation initial_ = Rotation::Identity();  // E: world_from_vehicle at the first gyro sample
   void smoothFrom(std::size_t first);
 
   std::vector<std::pair<double, Vector3>> raw_;      // GPS antenna positions [m] world ENU, as measured
+  double last_sigma_ = 0;                            // [m] stated accuracy of the last fix kept
   std::vector<std::pair<double, Vector3>> antenna_;  // the same, smoothed
 };
 

@@ -83,5 +83,37 @@ TEST(PoseEstimationTest, AShortRunSettlesOnWhatItHas) {
   EXPECT_LT(e.pitch, 4.0 * kDeg);
 }
 
+TEST(PoseEstimationTest, AGpsJumpIsDroppedNotFollowed) {
+  // From 1 s on, every fix of a flat drive is moved one degree north (111 km): a receiver glitch.
+  // Followed, it would stretch the map over 111 km; the fixes are dropped and counted instead.
+  test::TempDir dir;
+  scenes::SceneConfig cfg;
+  cfg.type = "flat";
+  cfg.seed = 1;
+  cfg.extent = 60;
+  scenes::writeScene(scenes::generateScene(cfg), dir / "s.xml", false);
+  auto world = std::make_shared<sim::World>(dir / "s.xml");
+  sim::SimConfig sim;
+  sim.camera.enabled = false;
+  sim::SimulatedRig rig(world, sim, 20);
+  PoseEstimator poses(rig.calibration(), PoseConfig{});
+  std::size_t dropped = 0, fixes_after = 0;
+  std::vector<rig::TimedPose> truth;
+  while (auto f = rig.next()) {
+    SensorFrame frame = f->sensors;
+    for (auto& fix : frame.gps) {
+      if (fix.time >= 1.0) fix.latitude_deg += 1.0, ++fixes_after;
+    }
+    dropped += poses.add(frame);
+    for (const auto& p : f->truth->poses) truth.push_back(p);
+  }
+  EXPECT_GT(fixes_after, 5u);
+  EXPECT_EQ(dropped, fixes_after);
+  ASSERT_TRUE(poses.settle(0.5));
+  // the last pose stays where the last good fix put the robot: within the 2 m it drove since
+  const Vector3 last = poses.worldFromVehicle(truth.back().time).translation();
+  EXPECT_LT((last - truth.back().world_from_vehicle.translation()).head<2>().norm(), 3.0);
+}
+
 }  // namespace
 }  // namespace terrain
