@@ -48,10 +48,17 @@ void Pipeline::process(const SensorFrame& frame) {
   if (frame.gyro.empty()) warn(id + "no gyro samples");
   if (!frame.image) warn(id + "no camera image");
   const auto t0 = Clock::now();
-  if (const std::size_t jumps = poses_.add(frame); jumps > 0) {
+  const GpsUpdate gps = poses_.add(frame);
+  if (gps.dropped > 0) {
     std::ostringstream m;
-    m << id << jumps << " GPS fix(es) dropped: farther from the previous fix than " << config_.pose.max_speed
+    m << id << gps.dropped << " GPS fix(es) dropped: farther from the previous fix than " << config_.pose.max_speed
       << " m/s allows";
+    warn(m.str());
+  }
+  if (gps.discarded > 0) {
+    std::ostringstream m;
+    m << id << "GPS track started over: its first " << gps.discarded
+      << " fix(es) disagreed with more fixes after them and were discarded";
     warn(m.str());
   }
   const double pose_ms = msSince(t0);
@@ -106,7 +113,8 @@ void Pipeline::finish() {
 bool Pipeline::restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertices, SegmentationResult segmentation,
                        std::vector<FrameRecord> records) {
   const std::size_t n = voxels.size();
-  if (segmentation.rough.size() != n || segmentation.refined.size() != n || segmentation.ground_height.size() != n) return false;
+  if (segmentation.rough.size() != n || segmentation.refined.size() != n || segmentation.ground_height.size() != n)
+    return false;
   for (const auto& v : vertices) {
     if (v.top_voxel >= n) return false;
   }
@@ -196,7 +204,8 @@ void Pipeline::processReady(const SensorFrame& frame) {
                                                              world_from_camera, config_.estimation, frame.image->rgb);
     rec.estimated_vertices = stats.estimated;
     if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
-    crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, config_.crown, config_.estimation);
+    crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, config_.crown,
+                    config_.estimation);
     rec.estimation_ms = msSince(t);
   }
   rec.total_ms = msSince(start);

@@ -56,7 +56,7 @@ void PoseEstimator::levelFromSweep(const LidarSweep& sweep) {
   levelled_ = true;
 }
 
-std::size_t PoseEstimator::add(const SensorFrame& frame) {
+GpsUpdate PoseEstimator::add(const SensorFrame& frame) {
   if (!levelled_) levelFromSweep(frame.sweep);
   // integrate the gyro: each sample is the mean rate over the preceding period
   if (rotations_.empty()) {
@@ -72,30 +72,45 @@ std::size_t PoseEstimator::add(const SensorFrame& frame) {
   }
   // GPS: antenna positions; new fixes change the smoothed values within one window before them
   const std::size_t first_new = raw_.size();
-  std::size_t jumps = 0;
-  auto sigma = [](double s) { return std::isfinite(s) && s > 0 ? s : 0.0; };
+  GpsUpdate update;
   for (const auto& f : frame.gps) {
     if (!std::isfinite(f.latitude_deg) || !std::isfinite(f.longitude_deg) || !std::isfinite(f.altitude_m)) continue;
     if (!raw_.empty() && f.time <= raw_.back().first) continue;
-    const Vector3 at = gpsToWorld(f);
-    // a jump no vehicle makes: a glitch, dropped (else one bad fix would stretch the map over kilometres)
-    if (!raw_.empty()) {
-      const double allowed =
-          config_.max_speed * (f.time - raw_.back().first) + 3 * (last_sigma_ + sigma(f.sigma_m)) + 1;
-      if ((at - raw_.back().second).norm() > allowed) {
-        ++jumps;
-        continue;
-      }
+    const Fix fix{f.time, gpsToWorld(f), std::isfinite(f.sigma_m) && f.sigma_m > 0 ? f.sigma_m : 0.0};
+    // a jump no vehicle makes from the last fix kept: a glitch, dropped (else one bad fix would
+    // stretch the map over kilometres); the dropped fixes that agree with each other are remembered
+    if (!raw_.empty() && !reachable({raw_.back().first, raw_.back().second, last_sigma_}, fix)) {
+      ++update.dropped;
+      if (!jumped_.empty() && !reachable(jumped_.back(), fix)) jumped_.clear();
+      jumped_.push_back(fix);
+      continue;
     }
-    raw_.emplace_back(f.time, at);
-    last_sigma_ = sigma(f.sigma_m);
+    jumped_.clear();
+    raw_.emplace_back(fix.time, fix.at);
+    last_sigma_ = fix.sigma;
   }
-  if (raw_.size() > first_new) smoothFrom(first_new);
+  if (!heading_known_ && jumped_.size() >= 3 && jumped_.size() > raw_.size()) {
+    // before the heading is known, more dropped fixes agreeing with each other than fixes kept: the
+    // kept ones were the glitch (a receiver's wild first fixes). The track starts over from the others.
+    update.discarded = raw_.size();
+    raw_.clear();
+    for (const Fix& j : jumped_) raw_.emplace_back(j.time, j.at);
+    last_sigma_ = jumped_.back().sigma;
+    jumped_.clear();
+    smoothFrom(0);
+  } else if (raw_.size() > first_new) {
+    smoothFrom(first_new);
+  }
   if (!heading_known_ && antenna_.size() >= 2 &&
       (antenna_.back().second - antenna_.front().second).head<2>().norm() >= config_.heading_baseline) {
     heading_known_ = alignment(initial_, config_.heading_baseline);
   }
-  return jumps;
+  return update;
+}
+
+bool PoseEstimator::reachable(const Fix& from, const Fix& to) const {
+  const double allowed = config_.max_speed * (to.time - from.time) + 3 * (from.sigma + to.sigma) + 1;
+  return (to.at - from.at).norm() <= allowed;
 }
 
 bool PoseEstimator::settle(double min_travel) {

@@ -43,6 +43,15 @@ struct PoseConfig {
                                     // allows (plus 3 sigma of each fix and 1 m) is dropped as a glitch
 };
 
+// What PoseEstimator::add did with a frame's GPS fixes.
+struct GpsUpdate {
+  // fixes dropped as jumps no vehicle makes from the last fix kept (PoseConfig::max_speed)
+  std::size_t dropped = 0;
+  // earlier fixes discarded instead: before the heading is known, when more dropped fixes than
+  // fixes kept agree with each other, the kept ones were the glitch and the track starts over
+  std::size_t discarded = 0;
+};
+
 struct TimedRotation {
   double time;
   Rotation world_from_vehicle;
@@ -53,8 +62,8 @@ class PoseEstimator {
   PoseEstimator(const RigCalibration& calibration, const PoseConfig& config);
 
   // Feeds a frame's GPS fixes and gyro samples (and, for the first frame, its sweep for levelling).
-  // Returns how many of its GPS fixes were dropped as jumps no vehicle makes (PoseConfig::max_speed).
-  std::size_t add(const SensorFrame& frame);
+  // Returns what became of its GPS fixes.
+  GpsUpdate add(const SensorFrame& frame);
   // True once the initial attitude is known; poses are valid from then on.
   bool ready() const { return heading_known_; }
   // At the end of the data: fixes the initial attitude from however far the robot has moved, if at
@@ -86,8 +95,16 @@ class PoseEstimator {
   Rotation initial_ = Rotation::Identity();  // E: world_from_vehicle at the first gyro sample
   void smoothFrom(std::size_t first);
 
-  std::vector<std::pair<double, Vector3>> raw_;      // GPS antenna positions [m] world ENU, as measured
-  double last_sigma_ = 0;                            // [m] stated accuracy of the last fix kept
+  std::vector<std::pair<double, Vector3>> raw_;  // GPS antenna positions [m] world ENU, as measured
+  double last_sigma_ = 0;                        // [m] stated accuracy of the last fix kept
+  struct Fix {
+    double time;   // [s]
+    Vector3 at;    // antenna position [m], world ENU
+    double sigma;  // [m] stated accuracy, 0 if unknown
+  };
+  std::vector<Fix> jumped_;  // the dropped fixes since the last one kept, if they agree with each other
+  // true if a vehicle at most max_speed fast gets from one fix to the other
+  bool reachable(const Fix& from, const Fix& to) const;
   std::vector<std::pair<double, Vector3>> antenna_;  // the same, smoothed
 };
 

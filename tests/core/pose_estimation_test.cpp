@@ -83,9 +83,14 @@ TEST(PoseEstimationTest, AShortRunSettlesOnWhatItHas) {
   EXPECT_LT(e.pitch, 4.0 * kDeg);
 }
 
-TEST(PoseEstimationTest, AGpsJumpIsDroppedNotFollowed) {
-  // From 1 s on, every fix of a flat drive is moved one degree north (111 km): a receiver glitch.
-  // Followed, it would stretch the map over 111 km; the fixes are dropped and counted instead.
+// A flat drive of 20 frames (2 s at 2 m/s), its GPS fixes at times in [from, to) moved one degree
+// north (111 km): a receiver glitch. Returns the fixes moved, the dropped and discarded counts and
+// how far the last pose lies from the truth [m].
+struct GlitchRun {
+  std::size_t moved = 0, dropped = 0, discarded = 0;
+  double error = 0;
+};
+GlitchRun glitch(double from, double to) {
   test::TempDir dir;
   scenes::SceneConfig cfg;
   cfg.type = "flat";
@@ -97,22 +102,44 @@ TEST(PoseEstimationTest, AGpsJumpIsDroppedNotFollowed) {
   sim.camera.enabled = false;
   sim::SimulatedRig rig(world, sim, 20);
   PoseEstimator poses(rig.calibration(), PoseConfig{});
-  std::size_t dropped = 0, fixes_after = 0;
+  GlitchRun run;
   std::vector<rig::TimedPose> truth;
   while (auto f = rig.next()) {
     SensorFrame frame = f->sensors;
     for (auto& fix : frame.gps) {
-      if (fix.time >= 1.0) fix.latitude_deg += 1.0, ++fixes_after;
+      if (fix.time >= from && fix.time < to) fix.latitude_deg += 1.0, ++run.moved;
     }
-    dropped += poses.add(frame);
+    const GpsUpdate update = poses.add(frame);
+    run.dropped += update.dropped;
+    run.discarded += update.discarded;
     for (const auto& p : f->truth->poses) truth.push_back(p);
   }
-  EXPECT_GT(fixes_after, 5u);
-  EXPECT_EQ(dropped, fixes_after);
-  ASSERT_TRUE(poses.settle(0.5));
-  // the last pose stays where the last good fix put the robot: within the 2 m it drove since
+  if (!poses.settle(0.5)) return run;
   const Vector3 last = poses.worldFromVehicle(truth.back().time).translation();
-  EXPECT_LT((last - truth.back().world_from_vehicle.translation()).head<2>().norm(), 3.0);
+  run.error = (last - truth.back().world_from_vehicle.translation()).head<2>().norm();
+  return run;
+}
+
+TEST(PoseEstimationTest, AGpsJumpIsDroppedNotFollowed) {
+  // from 1.4 s on: followed, the jump would stretch the map over 111 km; the fixes are dropped and
+  // the last pose stays where the last good fix put the robot, within the 1.2 m it drove since
+  const GlitchRun run = glitch(1.4, 1e9);
+  EXPECT_GT(run.moved, 4u);
+  EXPECT_EQ(run.dropped, run.moved);
+  EXPECT_EQ(run.discarded, 0u);
+  EXPECT_GT(run.error, 0.0);
+  EXPECT_LT(run.error, 2.0);
+}
+
+TEST(PoseEstimationTest, AGlitchAtTheStartIsDiscardedWhenLaterFixesOutnumberIt) {
+  // the first three fixes are the glitch: the fixes after them are dropped until four agree with each
+  // other, then the three are discarded and the track starts over from the four
+  const GlitchRun run = glitch(-1, 0.25);
+  EXPECT_EQ(run.moved, 3u);
+  EXPECT_EQ(run.dropped, 4u);
+  EXPECT_EQ(run.discarded, 3u);
+  EXPECT_GT(run.error, 0.0);
+  EXPECT_LT(run.error, 1.0);
 }
 
 }  // namespace
