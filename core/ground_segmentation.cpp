@@ -634,6 +634,36 @@ std::vector<Plane> tilePlanes(const TileLayout& layout, std::size_t count, const
   return planes;
 }
 
+// The single-site terms of the voxels of tiles 0 .. count - 1 of a layout (its first positions),
+// from each tile's ground plane; writes their ground heights and rough classes into out (by voxel
+// id) and returns the rough classes by position. edge(q, t, lx, ly, h) is called for every voxel q
+// of a column on the edge of its tile t, to add the terms of neighbours held fixed.
+template <class Edge>
+std::vector<std::uint8_t> setUnaries(const TileLayout& layout, std::size_t count, const std::vector<Plane>& planes,
+                                     double cell, const GroundSegmentationConfig& cfg, GmrfProblem& p,
+                                     SegmentationResult& out, Edge&& edge) {
+  const int k = layout.k();
+  const std::size_t m = count < layout.tiles().size() ? layout.column(count, 0) : layout.size();
+  p.resize(m);
+  std::vector<std::uint8_t> rough(m);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+    const auto& tile = layout.tiles()[t];
+    layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
+      const int x = tile.tx * k + lx, y = tile.ty * k + ly;
+      const double ground = planes[t].at((x + 0.5) * cell, (y + 0.5) * cell);
+      const bool on_edge = lx == 0 || ly == 0 || lx == k - 1 || ly == k - 1;
+      for (auto q = b; q < e; ++q) {
+        const float h = layout.height(q);
+        rough[q] = setUnary(p, q, h, x, y, layout.z(q), ground, cfg);
+        out.ground_height[layout.id(q)] = static_cast<float>(ground);
+        out.rough[layout.id(q)] = rough[q];
+        if (on_edge) edge(q, t, lx, ly, h);
+      }
+    });
+  });
+  return rough;
+}
+
 // The refined labels G1' of a problem, from its rough labels by the configured solver; sets the
 // result's energies and ICM sweeps.
 std::vector<std::uint8_t> refine(const GmrfProblem& p, const std::vector<std::uint8_t>& rough,
@@ -689,20 +719,8 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
     }
     // the problem over positions of the layout
     GmrfProblem p;
-    p.resize(n);
-    std::vector<std::uint8_t> rough(n);
-    tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-      const auto& tile = layout.tiles()[t];
-      layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
-        const int x = tile.tx * k + lx, y = tile.ty * k + ly;
-        const double ground = planes[t].at((x + 0.5) * cell, (y + 0.5) * cell);
-        for (auto q = b; q < e; ++q) {
-          rough[q] = setUnary(p, q, layout.height(q), x, y, layout.z(q), ground, cfg);
-          out.ground_height[layout.id(q)] = static_cast<float>(ground);
-          out.rough[layout.id(q)] = rough[q];
-        }
-      });
-    });
+    const std::vector<std::uint8_t> rough =
+        setUnaries(layout, tiles, planes, cell, cfg, p, out, [](std::uint32_t, std::size_t, int, int, float) {});
     layout.linkNeighbours(p, cfg, tiles);
     const std::vector<std::uint8_t> labels = refine(p, rough, cfg, out);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) { out.refined[layout.id(q)] = labels[q]; });
@@ -743,6 +761,24 @@ struct IncrementalGroundSegmentation::State {
     k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
   }
   std::pair<int, int> tileOf(const VoxelIndex& i) const { return {floorDiv(i.x(), k), floorDiv(i.y(), k)}; }
+
+  // appends to out, in key order, the tiles of the map within tile_radius of any of these that are
+  // not yet in seen (and adds them to it)
+  void windows(const std::vector<std::uint64_t>& of, std::unordered_set<std::uint64_t>& seen,
+               std::vector<std::uint64_t>& out) const {
+    const std::size_t first = out.size();
+    for (std::uint64_t key : of) {
+      const int tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
+      const int ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
+      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
+        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+          const std::uint64_t u = tileKey(tx + dx, ty + dy);
+          if (tiles.count(u) && seen.insert(u).second) out.push_back(u);
+        }
+      }
+    }
+    std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
+  }
 };
 
 IncrementalGroundSegmentation::IncrementalGroundSegmentation(const GroundSegmentationConfig& config)
@@ -813,20 +849,8 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   st.stats.touched_tiles = st.touched.size();
   // the tiles whose window reaches a touched tile, in a fixed order
   std::vector<std::uint64_t> keys;
-  {
-    std::unordered_set<std::uint64_t> seen;
-    for (std::uint64_t key : st.touched) {
-      const int tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
-      const int ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
-      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-          const std::uint64_t u = tileKey(tx + dx, ty + dy);
-          if (st.tiles.count(u) && seen.insert(u).second) keys.push_back(u);
-        }
-      }
-    }
-    std::sort(keys.begin(), keys.end());
-  }
+  std::unordered_set<std::uint64_t> seen;
+  st.windows(std::vector<std::uint64_t>(st.touched.begin(), st.touched.end()), seen, keys);
   for (std::uint64_t key : st.touched) {
     auto it = st.tiles.find(key);
     if (it != st.tiles.end()) it->second.pending = 0;
@@ -836,19 +860,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   if (keys.empty()) return;
   // the tiles to refit, then the other tiles of their windows: their voxels enter the planes
   std::vector<std::uint64_t> context;
-  {
-    std::unordered_set<std::uint64_t> seen(keys.begin(), keys.end());
-    for (std::uint64_t key : keys) {
-      const State::Tile& t = st.tiles.at(key);
-      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
-          const std::uint64_t u = tileKey(t.tx + dx, t.ty + dy);
-          if (st.tiles.count(u) && seen.insert(u).second) context.push_back(u);
-        }
-      }
-    }
-    std::sort(context.begin(), context.end());
-  }
+  st.windows(keys, seen, context);
   std::vector<TileLayout::Tile> tiles;
   std::vector<const std::vector<std::uint32_t>*> tile_ids;
   for (const auto* list : {&keys, &context}) {
@@ -863,40 +875,28 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   arena.execute([&] {
     const TileLayout layout(voxels, k, tiles, tile_ids);
     const std::vector<Plane> planes = tilePlanes(layout, count, cfg, st.cell);
-    // the subproblem: every voxel of the refitted tiles, the first positions of the layout
-    const std::size_t m = count < tiles.size() ? layout.column(count, 0) : layout.size();
-    st.stats.voxels = m;
+    // the subproblem: every voxel of the refitted tiles, the first positions of the layout.
+    // Neighbours in tiles outside it keep their labels: their pair terms become unary terms.
     GmrfProblem& p = st.problem;
-    p.resize(m);
-    std::vector<std::uint8_t> rough(m);
-    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+    const auto fixed = [&](std::uint32_t q, std::size_t t, int lx, int ly, float h) {
       const TileLayout::Tile& tile = tiles[t];
-      layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
-        const int x = tile.tx * k + lx, y = tile.ty * k + ly;
-        const double ground = planes[t].at((x + 0.5) * st.cell, (y + 0.5) * st.cell);
-        for (auto q = b; q < e; ++q) {
-          const std::uint32_t id = layout.id(q);
-          const float h = layout.height(q);
-          out.ground_height[id] = static_cast<float>(ground);
-          rough[q] = out.rough[id] = setUnary(p, q, h, x, y, layout.z(q), ground, cfg);
-          // neighbours in tiles outside the subproblem keep their labels: their pair terms become
-          // unary terms (only columns on a tile's edge have neighbours in another tile)
-          for (const VoxelIndex& d4 :
-               {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
-            const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
-            if (l >= 0 && l < k) continue;
-            const std::int64_t u = layout.tileAt(tile.tx + d4.x(), tile.ty + d4.y());
-            if (u >= 0 && static_cast<std::size_t>(u) < count) continue;
-            const std::int64_t j = map.find(VoxelIndex(x, y, layout.z(q)) + d4);
-            if (j < 0) continue;
-            const float w = pairWeight(cfg, h, voxels[j].height);
-            const bool ground_j = out.refined[j] != 0;
-            p.unary_ground[q] += ground_j ? -w : w;
-            p.unary_nonground[q] += ground_j ? w : -w;
-          }
-        }
-      });
-    });
+      for (const VoxelIndex& d4 :
+           {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
+        const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
+        if (l >= 0 && l < k) continue;
+        const std::int64_t u = layout.tileAt(tile.tx + d4.x(), tile.ty + d4.y());
+        if (u >= 0 && static_cast<std::size_t>(u) < count) continue;
+        const std::int64_t j = map.find(VoxelIndex(tile.tx * k + lx, tile.ty * k + ly, layout.z(q)) + d4);
+        if (j < 0) continue;
+        const float w = pairWeight(cfg, h, voxels[j].height);
+        const bool ground_j = out.refined[j] != 0;
+        p.unary_ground[q] += ground_j ? -w : w;
+        p.unary_nonground[q] += ground_j ? w : -w;
+      }
+    };
+    const std::vector<std::uint8_t> rough = setUnaries(layout, count, planes, st.cell, cfg, p, out, fixed);
+    const std::size_t m = rough.size();
+    st.stats.voxels = m;
     layout.linkNeighbours(p, cfg, count);
     const std::vector<std::uint8_t> labels = refine(p, rough, cfg, out);
     out.tiles = static_cast<int>(st.tiles.size());
