@@ -4,7 +4,9 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -28,10 +30,9 @@ bool parseSolver(const std::string& s, GroundSegmentationConfig::Solver& out) {
 namespace {
 
 // A histogram of heights in bins of bin_size whose edges are whole multiples of it, and its peak
-// refined to the mean of the heights in the peak bin and its two neighbours. Counts and sums are
-// kept in integers (heights above the lowest in 2^-20 m), so the peak does not depend on the order
-// in which heights are added: the whole-map and the incremental segmentation, which visit a tile's voxels in
-// different orders, agree to the bit.
+// refined to the mean of the heights in the peak bin and its two neighbours. Heights are summed
+// in the order they are added; the whole-map and the incremental segmentation add a tile's voxels
+// in the same order (the layout's), so they agree to the bit.
 class PeakHistogram {
  public:
   // empties the histogram for heights in [lo, hi] [m] (a height outside falls in the end bin, as
@@ -42,13 +43,24 @@ class PeakHistogram {
     first_ = floorInt(lo * inv_) - 1;
     bins_ = std::clamp(floorInt(hi * inv_) - first_ + 2, 1, 1 << 20);
     count_.assign(kLanes * bins_, 0);
-    sum_.assign(kLanes * bins_, 0);
+    sum_.assign(kLanes * bins_, 0.0);
   }
-  void add(double h) { add(h, (lane_ = (lane_ + 1) & (kLanes - 1))); }
+  void add(double h) { add(&h, 1, 0.0); }
   // adds h[i] - offset for i in [0, n)
-  void add(const float* h, std::size_t n, double offset) {
+  template <class T>
+  void add(const T* h, std::size_t n, double offset) {
+    // the bin of h - offset is floor((h - offset) / bin_size) - first_, clamped (NaN to the first)
+    const double shift = offset * inv_ + first_, last = bins_ - 1, below = offset + base_;
     int lane = lane_;
-    for (std::size_t i = 0; i < n; ++i) add(h[i] - offset, lane = (lane + 1) & (kLanes - 1));
+    for (std::size_t i = 0; i < n; ++i) {
+      double x = h[i] * inv_ - shift;
+      x = x > 0 ? x : 0;
+      x = x < last ? x : last;
+      const int b = kLanes * static_cast<int>(x) + lane;
+      ++count_[b];
+      sum_[b] += h[i] - below;
+      lane = (lane + 1) & (kLanes - 1);
+    }
     lane_ = lane;
   }
   std::int64_t total() const {
@@ -64,40 +76,34 @@ class PeakHistogram {
       const std::int64_t c = count(b);
       if (c > best) best = c, p = b;
     }
-    std::int64_t n = 0, sum = 0;
+    std::int64_t n = 0;
+    double sum = 0;
     for (int b = std::max(0, p - 1); b <= std::min(bins_ - 1, p + 1); ++b) {
       for (int l = 0; l < kLanes; ++l) sum += sum_[kLanes * b + l];
       n += count(b);
     }
-    return n == 0 ? std::numeric_limits<double>::quiet_NaN()
-                  : base_ + static_cast<double>(sum) / kScale / static_cast<double>(n);
+    return n == 0 ? std::numeric_limits<double>::quiet_NaN() : base_ + sum / static_cast<double>(n);
   }
 
  private:
   static constexpr int kLanes = 4;
-  static constexpr double kScale = 1048576.0;
   // floor(x) as an int, x clamped to +-2^30 (and NaN taken as 0)
   static int floorInt(double x) {
     x = x > -1073741824.0 ? (x < 1073741824.0 ? x : 1073741824.0) : (x <= -1073741824.0 ? -1073741824.0 : 0.0);
     const int t = static_cast<int>(x);
     return t - (x < t);
   }
-  // successive heights, mostly in one bin, go to different lanes: no chain of dependent
-  // read-modify-writes on one counter
-  void add(double h, int lane) {
-    const int b = std::clamp(floorInt(h * inv_) - first_, 0, bins_ - 1);
-    ++count_[kLanes * b + lane];
-    sum_[kLanes * b + lane] += static_cast<std::int64_t>((h - base_) * kScale);
-  }
   std::int64_t count(int b) const {
     std::int64_t c = 0;
     for (int l = 0; l < kLanes; ++l) c += count_[kLanes * b + l];
     return c;
   }
+  // successive heights, mostly in one bin, go to different lanes: no chain of dependent
+  // read-modify-writes on one counter
   double inv_ = 10, base_ = 0;
   int first_ = 0, bins_ = 0, lane_ = 0;
   std::vector<std::int32_t> count_;
-  std::vector<std::int64_t> sum_;
+  std::vector<double> sum_;
 };
 
 // a tile's histogram takes every histogram_stride-th column unless that leaves fewer voxels than this
@@ -107,6 +113,10 @@ constexpr std::int64_t kMinHistogram = 256;
 constexpr std::size_t kChunks = 64;
 
 }  // namespace
+
+float pairWeight(const GroundSegmentationConfig& cfg, float a, float b) {
+  return static_cast<float>(cfg.beta + cfg.gamma * std::exp(-std::abs(a - b)));
+}
 
 double histogramPeak(const std::vector<double>& heights, double bin_size) {
   if (heights.empty()) return std::numeric_limits<double>::quiet_NaN();
@@ -145,10 +155,11 @@ double gmrfEnergy(const GmrfProblem& p, const std::vector<std::uint8_t>& ground)
   return e;
 }
 
-int solveIcm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_iterations, int threads) {
-  const std::size_t n = ground.size();
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  // a grid's graph: every forward link matched by its backward one, and of nodes of two colours
+namespace {
+
+// throws std::invalid_argument unless the problem's graph is a grid's: every forward link matched
+// by its backward one, and of nodes of two colours
+void checkGrid(const GmrfProblem& p, std::size_t n, tbb::task_arena& arena) {
   std::vector<std::size_t> bad(kChunks, n);
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
@@ -167,39 +178,102 @@ int solveIcm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_it
                                   " is linked to a node that is missing, linked from another node along the same "
                                   "axis, or of the same parity");
   }
-  int sweeps = 0;
-  for (; sweeps < max_iterations; ++sweeps) {
-    std::vector<std::uint8_t> changed(kChunks, 0);
+}
+
+// ICM on a problem known to be a grid's. The first sweep visits every node; later ones only the
+// nodes next to one that changed since they were last visited (the others would keep their label:
+// nothing they depend on changed), which gives the labels of full sweeps at a fraction of the cost.
+IcmResult icm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_iterations, tbb::task_arena& arena) {
+  const std::size_t n = ground.size();
+  IcmResult result;
+  if (max_iterations <= 0) {
+    result.energy_initial = result.energy_final = gmrfEnergy(p, ground);
+    return result;
+  }
+  // per chunk: energy summed in the first sweep, energy change, and the nodes that changed
+  std::vector<double> energy(kChunks), delta(kChunks);
+  std::vector<std::vector<std::uint32_t>> moved(kChunks);
+  std::vector<std::uint32_t> visit;  // the nodes of the colour due next (after the first sweep)
+  // Updates node v of the given colour, in place; with `first`, adds the energy of the labelling
+  // the sweep started from to e: the single-site term of every node, before its update, and each
+  // pair once, from its node of colour 0.
+  const auto update = [&](std::uint32_t v, std::uint8_t colour, bool first, double& e, double& d,
+                          std::vector<std::uint32_t>& changed) {
+    double cost_g = p.unary_ground[v], cost_n = p.unary_nonground[v];
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t u = p.next[3 * v + a];
+      if (u != GmrfProblem::kNone) {
+        const double w = p.weight[3 * v + a];
+        cost_g += ground[u] ? -w : w;
+        cost_n += ground[u] ? w : -w;
+      }
+      const std::uint32_t b = p.prev[3 * v + a];
+      if (b != GmrfProblem::kNone) {
+        const double w = p.weight[3 * b + a];
+        cost_g += ground[b] ? -w : w;
+        cost_n += ground[b] ? w : -w;
+      }
+    }
+    if (first)
+      e += colour == 0 ? (ground[v] ? cost_g : cost_n) : (ground[v] ? p.unary_ground[v] : p.unary_nonground[v]);
+    const std::uint8_t best = cost_g < cost_n ? 1 : (cost_n < cost_g ? 0 : ground[v]);
+    if (best != ground[v]) {
+      d += best ? cost_g - cost_n : cost_n - cost_g;
+      ground[v] = best;
+      changed.push_back(v);
+    }
+  };
+  double change = 0;
+  for (int sweep = 0; sweep < max_iterations; ++sweep) {
+    bool any = false;
     for (std::uint8_t colour = 0; colour < 2; ++colour) {
       // nodes of one colour have no pair between them: update them all at once, in place
       arena.execute([&] {
         tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
-          for (std::size_t v = n * c / kChunks; v < n * (c + 1) / kChunks; ++v) {
-            if ((p.parity[v] & 1) != colour) continue;
-            float cost_g = p.unary_ground[v], cost_n = p.unary_nonground[v];
-            for (int a = 0; a < 3; ++a) {
-              const std::uint32_t u = p.next[3 * v + a];
-              if (u != GmrfProblem::kNone) {
-                const float w = p.weight[3 * v + a];
-                cost_g += ground[u] ? -w : w;
-                cost_n += ground[u] ? w : -w;
-              }
-              const std::uint32_t b = p.prev[3 * v + a];
-              if (b != GmrfProblem::kNone) {
-                const float w = p.weight[3 * b + a];
-                cost_g += ground[b] ? -w : w;
-                cost_n += ground[b] ? w : -w;
-              }
+          double e = 0, d = 0;
+          moved[c].clear();
+          if (sweep == 0) {
+            for (std::size_t v = n * c / kChunks; v < n * (c + 1) / kChunks; ++v) {
+              if ((p.parity[v] & 1) == colour) update(static_cast<std::uint32_t>(v), colour, true, e, d, moved[c]);
             }
-            const std::uint8_t best = cost_g < cost_n ? 1 : (cost_n < cost_g ? 0 : ground[v]);
-            if (best != ground[v]) ground[v] = best, changed[c] = 1;
+          } else {
+            const std::size_t m = visit.size();
+            for (std::size_t i = m * c / kChunks; i < m * (c + 1) / kChunks; ++i)
+              update(visit[i], colour, false, e, d, moved[c]);
           }
+          if (sweep == 0) energy[c] += e;
+          delta[c] = d;
         });
       });
+      // the other colour's nodes next to those that changed are visited next
+      visit.clear();
+      for (std::size_t c = 0; c < kChunks; ++c) {
+        change += delta[c];
+        for (std::uint32_t v : moved[c]) {
+          any = true;
+          for (int a = 0; a < 3; ++a) {
+            if (p.next[3 * v + a] != GmrfProblem::kNone) visit.push_back(p.next[3 * v + a]);
+            if (p.prev[3 * v + a] != GmrfProblem::kNone) visit.push_back(p.prev[3 * v + a]);
+          }
+        }
+      }
+      std::sort(visit.begin(), visit.end());
+      visit.erase(std::unique(visit.begin(), visit.end()), visit.end());
     }
-    if (std::find(changed.begin(), changed.end(), 1) == changed.end()) break;
+    if (!any) break;
+    ++result.sweeps;
   }
-  return sweeps;
+  for (double e : energy) result.energy_initial += e;
+  result.energy_final = result.energy_initial + change;
+  return result;
+}
+
+}  // namespace
+
+IcmResult solveIcm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_iterations, int threads) {
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  checkGrid(p, ground.size(), arena);
+  return icm(p, ground, max_iterations, arena);
 }
 
 namespace {
@@ -215,11 +289,16 @@ int floorMod(int a, int b) { return a - floorDiv(a, b) * b; }
 // sums of a point set, relative to a reference point near it, for least squares in one pass
 struct Moments {
   double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0;
-  double zmin = std::numeric_limits<double>::infinity();
-  void add(const Point3& p, const Point3& ref) {
-    const double dx = p.x() - ref.x(), dy = p.y() - ref.y(), dz = p.z() - ref.z();
-    n += 1, x += dx, y += dy, z += dz, xx += dx * dx, xy += dx * dy, yy += dy * dy, xz += dx * dz, yz += dy * dz;
-    zmin = std::min(zmin, p.z());
+  double zmin = std::numeric_limits<double>::infinity();  // the lowest point's z, relative too
+  // adds moments taken relative to a reference point s away from this one's
+  void add(const Moments& m, const Eigen::Vector3d& s) {
+    n += m.n, x += m.x + m.n * s.x(), y += m.y + m.n * s.y(), z += m.z + m.n * s.z();
+    xx += m.xx + 2 * s.x() * m.x + m.n * s.x() * s.x();
+    xy += m.xy + s.x() * m.y + s.y() * m.x + m.n * s.x() * s.y();
+    yy += m.yy + 2 * s.y() * m.y + m.n * s.y() * s.y();
+    xz += m.xz + s.x() * m.z + s.z() * m.x + m.n * s.x() * s.z();
+    yz += m.yz + s.y() * m.z + s.z() * m.y + m.n * s.y() * s.z();
+    zmin = std::min(zmin, m.zmin + s.z());
   }
   // the least-squares plane z = a x + b y + c (normal equations, centred); a steeper plane than
   // 35 degrees is not terrain: level at the lowest point instead
@@ -231,43 +310,85 @@ struct Moments {
     Eigen::Vector2d ab = Eigen::Vector2d::Zero();
     if (std::abs(ata.determinant()) > 1e-9) ab = ata.ldlt().solve(atb);
     Plane p{ab.x(), ab.y(), ref.z() + mz - ab.x() * (ref.x() + mx) - ab.y() * (ref.y() + my)};
-    if (std::hypot(p.a, p.b) > 0.7) p = {0, 0, zmin};
+    if (std::hypot(p.a, p.b) > 0.7) p = {0, 0, ref.z() + zmin};
     return p;
   }
 };
 
-// least squares in three rounds, each fitted to the points the previous plane left within
-// 1.0 m, then 0.7 m; one pass over the points per round. The points are the concatenation of
-// `parts`, read in place.
-Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
-  std::size_t n = 0;
-  const Point3* first = nullptr;
-  for (const auto* part : parts) {
-    if (!first && !part->empty()) first = &part->front();
-    n += part->size();
-  }
-  if (n < 3) return n == 0 ? Plane{} : Plane{0, 0, first->z()};
-  const Point3 ref = *first;
-  Moments all;
-  for (const auto* part : parts) {
-    for (const auto& p : *part) all.add(p, ref);
-  }
-  const Plane plane0 = all.plane(ref);
-  Moments near1;
-  for (const auto* part : parts) {
-    for (const auto& p : *part) {
-      if (std::abs(p.z() - plane0.at(p.x(), p.y())) < 1.0) near1.add(p, ref);
+// The plane-fit candidates of a tile, relative to its reference point (the centre of its first
+// column, at the height of its first candidate), in single precision and padded to a multiple of
+// four with points that no plane keeps: four lanes of sums run side by side.
+struct Candidates {
+  static constexpr int kLanes = 4;
+  Point3 ref = Point3::Zero();
+  std::size_t count = 0;
+  std::vector<float> x, y, z;
+  Moments all;  // of every candidate, relative to ref
+
+  // The moments of the candidates within 1.0 m of plane p0 and, if p1 is given, within 0.7 m of
+  // p1 (both in world coordinates).
+  Moments near(const Plane& p0, const Plane* p1) const {
+    // four lanes in a vector register (GCC and Clang vector extensions: SSE, NEON); comparisons
+    // give all-ones or zero per lane, used as masks
+    using F4 = float __attribute__((vector_size(16)));
+    using I4 = std::int32_t __attribute__((vector_size(16)));
+    static_assert(kLanes == 4);
+    const auto local = [&](const Plane& p) {
+      return std::array<float, 3>{static_cast<float>(p.a), static_cast<float>(p.b),
+                                  static_cast<float>(p.at(ref.x(), ref.y()) - ref.z())};
+    };
+    const std::array<float, 3> q0 = local(p0), q1 = p1 ? local(*p1) : std::array<float, 3>{0, 0, 0};
+    const float tol1 = p1 ? 0.7f : std::numeric_limits<float>::infinity();
+    const F4 zero = {0, 0, 0, 0}, one = zero + 1.0f, inf = zero + std::numeric_limits<float>::infinity();
+    F4 n = zero, sx = zero, sy = zero, sz = zero, xx = zero, xy = zero, yy = zero, xz = zero, yz = zero, zmin = inf;
+    for (std::size_t i = 0; i < x.size(); i += kLanes) {
+      F4 px, py, pz;
+      std::memcpy(&px, &x[i], sizeof px), std::memcpy(&py, &y[i], sizeof py), std::memcpy(&pz, &z[i], sizeof pz);
+      const F4 r0 = pz - (q0[0] * px + q0[1] * py + q0[2]), r1 = pz - (q1[0] * px + q1[1] * py + q1[2]);
+      const I4 keep = (r0 < 1.0f) & (r0 > -1.0f) & (r1 < tol1) & (r1 > -tol1);
+      const F4 m = reinterpret_cast<F4>(keep & reinterpret_cast<I4>(one));
+      n += m, sx += m * px, sy += m * py, sz += m * pz;
+      xx += m * px * px, xy += m * px * py, yy += m * py * py, xz += m * px * pz, yz += m * py * pz;
+      const F4 kept = reinterpret_cast<F4>((keep & reinterpret_cast<I4>(pz)) | (~keep & reinterpret_cast<I4>(inf)));
+      const I4 lower = kept < zmin;
+      zmin = reinterpret_cast<F4>((lower & reinterpret_cast<I4>(kept)) | (~lower & reinterpret_cast<I4>(zmin)));
     }
+    Moments out;
+    for (int l = 0; l < kLanes; ++l) {
+      out.n += n[l], out.x += sx[l], out.y += sy[l], out.z += sz[l], out.xx += xx[l], out.xy += xy[l];
+      out.yy += yy[l], out.xz += xz[l], out.yz += yz[l], out.zmin = std::min<double>(out.zmin, zmin[l]);
+    }
+    return out;
   }
+};
+
+// Of the moments of each part about its own reference point, the sum about ref.
+template <class Part>
+Moments sumAbout(const std::vector<const Candidates*>& parts, const Point3& ref, Part&& part) {
+  Moments sum;
+  for (const auto* c : parts) {
+    if (c->count > 0) sum.add(part(*c), c->ref - ref);
+  }
+  return sum;
+}
+
+// least squares in three rounds, each fitted to the points the previous plane left within
+// 1.0 m, then 0.7 m; one pass over the points per round, the first one made beforehand. The
+// points are the candidates of all the parts.
+Plane fitPlane(const std::vector<const Candidates*>& parts) {
+  std::size_t n = 0;
+  const Candidates* first = nullptr;
+  for (const auto* part : parts) {
+    if (!first && part->count > 0) first = part;
+    n += part->count;
+  }
+  if (n < 3) return n == 0 ? Plane{} : Plane{0, 0, first->ref.z()};
+  const Point3 ref = first->ref;
+  const Plane plane0 = sumAbout(parts, ref, [](const Candidates& c) { return c.all; }).plane(ref);
+  const Moments near1 = sumAbout(parts, ref, [&](const Candidates& c) { return c.near(plane0, nullptr); });
   if (near1.n < 3) return plane0;
   const Plane plane1 = near1.plane(ref);
-  Moments near2;
-  for (const auto* part : parts) {
-    for (const auto& p : *part) {
-      if (std::abs(p.z() - plane0.at(p.x(), p.y())) < 1.0 && std::abs(p.z() - plane1.at(p.x(), p.y())) < 0.7)
-        near2.add(p, ref);
-    }
-  }
+  const Moments near2 = sumAbout(parts, ref, [&](const Candidates& c) { return c.near(plane0, &plane1); });
   if (near2.n < 3) return plane1;
   return near2.plane(ref);
 }
@@ -277,8 +398,10 @@ Plane fitPlane(const std::vector<const std::vector<Point3>*>& parts) {
 // lowest of every 2 x 2 block of columns, at its column's centre. A quarter of the columns fix a
 // plane as well as all of them. The whole-map and the incremental segmentation both take a tile's
 // candidates from here.
-void candidatesFromLows(const std::vector<float>& low, int k, int cx, int cy, double cell, std::vector<Point3>& out) {
-  out.clear();
+void candidatesFromLows(const std::vector<float>& low, int k, int cx, int cy, double cell, Candidates& out) {
+  out.x.clear(), out.y.clear(), out.z.clear();
+  out.all = Moments{};
+  out.ref = Point3((cx + 0.5) * cell, (cy + 0.5) * cell, 0);
   for (int r = 0; r < k; r += 2) {
     for (int c = 0; c < k; c += 2) {
       float best = std::numeric_limits<float>::infinity();
@@ -289,8 +412,22 @@ void candidatesFromLows(const std::vector<float>& low, int k, int cx, int cy, do
           if (l < best) best = l, br = r + dr, bc = c + dc;
         }
       }
-      if (std::isfinite(best)) out.emplace_back((cx + bc + 0.5) * cell, (cy + br + 0.5) * cell, best);
+      if (!std::isfinite(best)) continue;
+      if (out.z.empty()) out.ref.z() = best;
+      out.x.push_back(static_cast<float>(bc * cell));
+      out.y.push_back(static_cast<float>(br * cell));
+      out.z.push_back(static_cast<float>(best - out.ref.z()));
     }
+  }
+  out.count = out.x.size();
+  for (std::size_t i = 0; i < out.count; ++i) {
+    const double px = out.x[i], py = out.y[i], pz = out.z[i];
+    auto& m = out.all;
+    m.n += 1, m.x += px, m.y += py, m.z += pz, m.xx += px * px, m.xy += px * py, m.yy += py * py;
+    m.xz += px * pz, m.yz += py * pz, m.zmin = std::min(m.zmin, pz);
+  }
+  while (out.x.size() % Candidates::kLanes != 0) {
+    out.x.push_back(0), out.y.push_back(0), out.z.push_back(std::numeric_limits<float>::max());
   }
 }
 
@@ -307,30 +444,37 @@ bool setUnary(GmrfProblem& p, std::size_t i, float h, int x, int y, int z, doubl
   return g1;
 }
 
-// the pair-site weight of two neighbouring voxels of heights a and b (Eqs. 21-22)
-float pairWeight(const GroundSegmentationConfig& cfg, float a, float b) {
-  return static_cast<float>(cfg.beta + cfg.gamma * std::exp(-std::abs(a - b)));
-}
-
 // A set of tiles of k x k columns and their voxels, laid out tile by tile, column by column
 // (row-major inside the tile) and upwards inside each column: a position numbers a voxel in this
 // order. Finding a voxel's neighbours is then a walk along two short sorted columns, and a
-// tile's voxels are contiguous.
+// tile's voxels are contiguous. Built again and again in the same memory.
 class TileLayout {
  public:
   struct Tile {
     int tx = 0, ty = 0;
   };
   // Every voxel of the map, in the tiles it covers (in row-major tile order).
-  TileLayout(const std::vector<Voxel>& voxels, int k) : k_(k) {
+  void build(const std::vector<Voxel>& voxels, int k) {
+    clear(k);
     if (voxels.empty()) return;
-    int x0 = voxels[0].index.x(), x1 = x0, y0 = voxels[0].index.y(), y1 = y0;
-    for (const auto& v : voxels) {
-      x0 = std::min(x0, v.index.x()), x1 = std::max(x1, v.index.x());
-      y0 = std::min(y0, v.index.y()), y1 = std::max(y1, v.index.y());
-    }
+    // each voxel's tile, and the tiles' extent (over fixed chunks of voxels)
     const std::size_t n = voxels.size();
-    setGrid(floorDiv(x0, k), floorDiv(y0, k), floorDiv(x1, k), floorDiv(y1, k), n);
+    tile_of_.resize(n);
+    std::vector<std::array<int, 4>> extent(kChunks, {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
+                                                     std::numeric_limits<int>::min(), std::numeric_limits<int>::min()});
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+      auto& [x0, y0, x1, y1] = extent[c];
+      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
+        const Tile t{floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)};
+        tile_of_[i] = t;
+        x0 = std::min(x0, t.tx), y0 = std::min(y0, t.ty), x1 = std::max(x1, t.tx), y1 = std::max(y1, t.ty);
+      }
+    });
+    for (std::size_t c = 1; c < kChunks; ++c) {
+      extent[0][0] = std::min(extent[0][0], extent[c][0]), extent[0][1] = std::min(extent[0][1], extent[c][1]);
+      extent[0][2] = std::max(extent[0][2], extent[c][2]), extent[0][3] = std::max(extent[0][3], extent[c][3]);
+    }
+    setGrid(extent[0][0], extent[0][1], extent[0][2], extent[0][3], n);
     if (!grid_.empty()) {
       groupDense(voxels);
     } else {
@@ -339,9 +483,10 @@ class TileLayout {
   }
 
   // The voxels of the given tiles (tile coordinates and voxel ids), in that order.
-  TileLayout(const std::vector<Voxel>& voxels, int k, const std::vector<Tile>& tiles,
-             const std::vector<const std::vector<std::uint32_t>*>& ids)
-      : k_(k), tiles_(tiles) {
+  void build(const std::vector<Voxel>& voxels, int k, const std::vector<Tile>& tiles,
+             const std::vector<const std::vector<std::uint32_t>*>& ids) {
+    clear(k);
+    tiles_ = tiles;
     if (tiles.empty()) return;
     int x0 = tiles[0].tx, x1 = x0, y0 = tiles[0].ty, y1 = y0;
     for (const auto& t : tiles) {
@@ -349,13 +494,13 @@ class TileLayout {
       y0 = std::min(y0, t.ty), y1 = std::max(y1, t.ty);
     }
     setGrid(x0, y0, x1, y1, tiles.size());
-    std::vector<std::uint32_t> first{0};
+    first_.push_back(0);
     for (std::size_t t = 0; t < tiles.size(); ++t) {
       setTile(gridCell(tiles[t].tx, tiles[t].ty), t);
       ids_.insert(ids_.end(), ids[t]->begin(), ids[t]->end());
-      first.push_back(static_cast<std::uint32_t>(ids_.size()));
+      first_.push_back(static_cast<std::uint32_t>(ids_.size()));
     }
-    sortColumns(voxels, first);
+    sortColumns(voxels);
   }
 
   int k() const { return k_; }
@@ -402,59 +547,80 @@ class TileLayout {
   }
 
   // Links every voxel of tiles 0 .. count - 1 to its neighbours at +x, +y, +z in those tiles, with
-  // their pair weights.
+  // their pair weights: sets every voxel's next and weight (kNone and 0 where it has no neighbour)
+  // and its neighbours' prev. The prev of a voxel no other links to must be kNone already.
   void linkNeighbours(GmrfProblem& p, const GroundSegmentationConfig& cfg, std::size_t count) const {
     const auto inside = [count](std::int64_t u) { return u >= 0 && static_cast<std::size_t>(u) < count ? u : -1; };
     tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
       const std::int64_t east = inside(tileAt(tiles_[t].tx + 1, tiles_[t].ty));
       const std::int64_t north = inside(tileAt(tiles_[t].tx, tiles_[t].ty + 1));
       forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
-        for (std::uint32_t q = b; q + 1 < e; ++q) {
-          if (z_[q + 1] == z_[q] + 1) p.link(q, 2, q + 1, pairWeight(cfg, height_[q], height_[q + 1]));
+        for (std::uint32_t q = b; q < e; ++q) {
+          if (q + 1 < e && z_[q + 1] == z_[q] + 1) {
+            p.link(q, 2, q + 1, pairWeight(cfg, height_[q], height_[q + 1]));
+          } else {
+            p.next[3 * q + 2] = GmrfProblem::kNone, p.weight[3 * q + 2] = 0;
+          }
         }
         const std::size_t c = static_cast<std::size_t>(ly) * k_ + lx;
+        const std::size_t o = static_cast<std::size_t>(ly) * k_;
         if (lx + 1 < k_) {
           linkColumns(p, cfg, b, e, column(t, c + 1), column(t, c + 2), 0);
-        } else if (east >= 0) {
-          const std::size_t o = static_cast<std::size_t>(ly) * k_;
-          linkColumns(p, cfg, b, e, column(east, o), column(east, o + 1), 0);
+        } else {
+          linkColumns(p, cfg, b, e, east >= 0 ? column(east, o) : 0, east >= 0 ? column(east, o + 1) : 0, 0);
         }
         if (ly + 1 < k_) {
           linkColumns(p, cfg, b, e, column(t, c + k_), column(t, c + k_ + 1), 1);
-        } else if (north >= 0) {
-          linkColumns(p, cfg, b, e, column(north, lx), column(north, lx + 1), 1);
+        } else {
+          linkColumns(p, cfg, b, e, north >= 0 ? column(north, lx) : 0, north >= 0 ? column(north, lx + 1) : 0, 1);
         }
       });
     });
   }
 
  private:
+  void clear(int k) {
+    k_ = k;
+    gx0_ = gy0_ = nx_ = ny_ = 0;
+    grid_.clear(), sparse_.clear(), tiles_.clear(), ids_.clear(), first_.clear();
+  }
+
   // voxel ids grouped by tile through a grid over the map's extent (counting sort, in id order
   // inside a tile)
   void groupDense(const std::vector<Voxel>& voxels) {
     const std::size_t n = voxels.size(), cells = grid_.size();
-    std::vector<std::uint32_t> tile(n);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      tile[i] =
-          static_cast<std::uint32_t>(gridCell(floorDiv(voxels[i].index.x(), k_), floorDiv(voxels[i].index.y(), k_)));
+    // a counting sort in chunks of voxels (as many as leave a count per chunk and cell no larger
+    // than the voxels): each chunk counts, then places, its voxels in id order after those of
+    // the chunks before it
+    const std::size_t chunks = std::clamp<std::size_t>(n / cells, 1, kChunks);
+    std::vector<std::uint32_t>& offset = scratch_;
+    offset.assign(chunks * cells, 0);
+    tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+      std::uint32_t* count = offset.data() + c * cells;
+      for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i)
+        ++count[gridCell(tile_of_[i].tx, tile_of_[i].ty)];
     });
-    std::vector<std::uint32_t> start(cells + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++start[tile[i] + 1];
-    for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    std::uint32_t placed = 0;
+    for (std::size_t cell = 0; cell < cells; ++cell) {
+      const std::uint32_t start = placed;
+      for (std::size_t c = 0; c < chunks; ++c) {
+        const std::uint32_t count = offset[c * cells + cell];
+        offset[c * cells + cell] = placed;
+        placed += count;
+      }
+      if (placed == start) continue;
+      grid_[cell] = static_cast<std::int32_t>(tiles_.size());
+      tiles_.push_back({static_cast<int>(cell % nx_) + gx0_, static_cast<int>(cell / nx_) + gy0_});
+      first_.push_back(start);
+    }
     ids_.resize(n);
-    {
-      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-      for (std::uint32_t i = 0; i < n; ++i) ids_[fill[tile[i]]++] = i;
-    }
-    std::vector<std::uint32_t> first;
-    for (std::size_t c = 0; c < cells; ++c) {
-      if (start[c] == start[c + 1]) continue;
-      grid_[c] = static_cast<std::int32_t>(tiles_.size());
-      tiles_.push_back({static_cast<int>(c % nx_) + gx0_, static_cast<int>(c / nx_) + gy0_});
-      first.push_back(start[c]);
-    }
-    first.push_back(static_cast<std::uint32_t>(n));
-    sortColumns(voxels, first);
+    tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+      std::uint32_t* fill = offset.data() + c * cells;
+      for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i)
+        ids_[fill[gridCell(tile_of_[i].tx, tile_of_[i].ty)]++] = static_cast<std::uint32_t>(i);
+    });
+    first_.push_back(static_cast<std::uint32_t>(n));
+    sortColumns(voxels);
   }
 
   // the same, in the same tile order, by sorting the voxels' grid cells: for maps whose extent
@@ -463,22 +629,20 @@ class TileLayout {
     const std::size_t n = voxels.size();
     std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      keyed[i] = {gridCell(floorDiv(voxels[i].index.x(), k_), floorDiv(voxels[i].index.y(), k_)),
-                  static_cast<std::uint32_t>(i)};
+      keyed[i] = {gridCell(tile_of_[i].tx, tile_of_[i].ty), static_cast<std::uint32_t>(i)};
     });
     std::sort(keyed.begin(), keyed.end());
     ids_.resize(n);
-    std::vector<std::uint32_t> first;
     for (std::size_t j = 0; j < n; ++j) {
       ids_[j] = keyed[j].second;
       if (j > 0 && keyed[j].first == keyed[j - 1].first) continue;
       const std::uint64_t c = keyed[j].first;
       setTile(c, tiles_.size());
       tiles_.push_back({static_cast<int>(c % nx_) + gx0_, static_cast<int>(c / nx_) + gy0_});
-      first.push_back(static_cast<std::uint32_t>(j));
+      first_.push_back(static_cast<std::uint32_t>(j));
     }
-    first.push_back(static_cast<std::uint32_t>(n));
-    sortColumns(voxels, first);
+    first_.push_back(static_cast<std::uint32_t>(n));
+    sortColumns(voxels);
   }
 
   // the tile grid over [x0, x1] x [y0, y1]: dense unless it would hold far more cells than the
@@ -501,8 +665,9 @@ class TileLayout {
     }
   }
 
-  // orders each tile's voxels (positions first[t] .. first[t + 1]) by column and z
-  void sortColumns(const std::vector<Voxel>& voxels, const std::vector<std::uint32_t>& first) {
+  // orders each tile's voxels (positions first_[t] .. first_[t + 1]) by column and z
+  void sortColumns(const std::vector<Voxel>& voxels) {
+    const std::vector<std::uint32_t>& first = first_;
     const std::size_t kk = static_cast<std::size_t>(k_) * k_;
     columns_.resize(tiles_.size() * (kk + 1));
     z_.resize(ids_.size());
@@ -542,17 +707,16 @@ class TileLayout {
   }
 
   // links the voxels of column [b, e) to those of the column [nb, ne) next to it along axis
-  // (both sorted by z): a merge
+  // (both sorted by z; empty if there is none): a merge. Voxels with no neighbour there get none.
   void linkColumns(GmrfProblem& p, const GroundSegmentationConfig& cfg, std::uint32_t b, std::uint32_t e,
                    std::uint32_t nb, std::uint32_t ne, int axis) const {
-    while (b < e && nb < ne) {
-      if (z_[b] < z_[nb]) {
-        ++b;
-      } else if (z_[nb] < z_[b]) {
+    for (; b < e; ++b) {
+      while (nb < ne && z_[nb] < z_[b]) ++nb;
+      if (nb < ne && z_[nb] == z_[b]) {
+        p.link(b, axis, nb, pairWeight(cfg, height_[b], height_[nb]));
         ++nb;
       } else {
-        p.link(b, axis, nb, pairWeight(cfg, height_[b], height_[nb]));
-        ++b, ++nb;
+        p.next[3 * b + axis] = GmrfProblem::kNone, p.weight[3 * b + axis] = 0;
       }
     }
   }
@@ -567,6 +731,9 @@ class TileLayout {
   std::vector<std::int32_t> z_;         // voxel z index per position
   std::vector<float> height_;           // voxel height per position [m]
   std::vector<float> range_;            // per tile: its lowest and highest voxel height [m]
+  std::vector<std::uint32_t> first_;    // per tile and one past the last: its first position
+  std::vector<Tile> tile_of_;           // per voxel: its tile (while grouping)
+  std::vector<std::uint32_t> scratch_;  // per chunk of voxels and grid cell: counts, then offsets (while grouping)
 };
 
 // The peak of the histogram of heights above a plane over a set of tiles of a layout: the offset
@@ -602,82 +769,138 @@ double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& ti
   return histogram.peak();
 }
 
-// The ground planes of tiles 0 .. count - 1 of a layout (h1 as a function of position): each
-// fitted through the plane-fit candidates of the tiles of its window that are in the layout, and
-// lifted to the peak of the window's heights above it. The whole-map and the incremental
-// segmentation both take their planes from here.
-std::vector<Plane> tilePlanes(const TileLayout& layout, std::size_t count, const GroundSegmentationConfig& cfg,
-                              double cell) {
+// What a segmentation works in, kept from one call to the next so that its memory is reused.
+struct Workspace {
+  TileLayout layout;
+  std::vector<Candidates> candidates;       // per tile of the layout
+  std::vector<Plane> planes;                // per tile segmented
+  GmrfProblem problem;                      // over the positions of the tiles segmented
+  std::vector<std::uint8_t> rough, labels;  // per position: rough and refined labels
+};
+
+// The ground planes of tiles 0 .. count - 1 of the workspace's layout (h1 as a function of
+// position): each fitted through the plane-fit candidates of the tiles of its window that are in
+// the layout, and lifted to the peak of the window's heights above it. The whole-map and the
+// incremental segmentation both take their planes from here.
+void tilePlanes(Workspace& ws, std::size_t count, const GroundSegmentationConfig& cfg, double cell) {
+  const TileLayout& layout = ws.layout;
   const int k = layout.k();
   const std::size_t tiles = layout.tiles().size();
-  std::vector<std::vector<Point3>> candidates(tiles);
+  auto& candidates = ws.candidates;
+  candidates.resize(tiles);
   tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
     std::vector<float> low;
     layout.columnLows(t, low);
     candidatesFromLows(low, k, layout.tiles()[t].tx * k, layout.tiles()[t].ty * k, cell, candidates[t]);
   });
-  std::vector<Plane> planes(count);
+  ws.planes.resize(count);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
     std::vector<std::size_t> window;
-    std::vector<const std::vector<Point3>*> points;
+    std::vector<const Candidates*> points;
     for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
       for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
         const std::int64_t u = layout.tileAt(layout.tiles()[t].tx + dx, layout.tiles()[t].ty + dy);
         if (u >= 0) window.push_back(static_cast<std::size_t>(u)), points.push_back(&candidates[u]);
       }
     }
-    planes[t] = fitPlane(points);
+    Plane plane = fitPlane(points);
     PeakHistogram histogram;
-    planes[t].c +=
-        residualPeak(layout, window, t, planes[t], cell, cfg.bin_size, std::max(1, cfg.histogram_stride), histogram);
+    plane.c += residualPeak(layout, window, t, plane, cell, cfg.bin_size, std::max(1, cfg.histogram_stride), histogram);
+    ws.planes[t] = plane;
   });
-  return planes;
 }
 
-// The single-site terms of the voxels of tiles 0 .. count - 1 of a layout (its first positions),
-// from each tile's ground plane; writes their ground heights and rough classes into out (by voxel
-// id) and returns the rough classes by position. edge(q, t, lx, ly, h) is called for every voxel q
-// of a column on the edge of its tile t, to add the terms of neighbours held fixed.
+// The problem and rough labels over the voxels of tiles 0 .. count - 1 of the workspace's layout
+// (its first positions): single-site terms from each tile's ground plane, no backward links (the
+// forward ones and the weights are left for linkNeighbours to set). Writes the voxels' ground
+// heights and rough classes into out (by voxel id). edge(q, t, lx, ly, h) is called for every
+// voxel q of a column on the edge of its tile t, to add the terms of neighbours held fixed.
 template <class Edge>
-std::vector<std::uint8_t> setUnaries(const TileLayout& layout, std::size_t count, const std::vector<Plane>& planes,
-                                     double cell, const GroundSegmentationConfig& cfg, GmrfProblem& p,
-                                     SegmentationResult& out, Edge&& edge) {
+void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegmentationConfig& cfg,
+                SegmentationResult& out, Edge&& edge) {
+  const TileLayout& layout = ws.layout;
   const int k = layout.k();
   const std::size_t m = count < layout.tiles().size() ? layout.column(count, 0) : layout.size();
-  p.resize(m);
-  std::vector<std::uint8_t> rough(m);
+  // every node's fields are written below or by linkNeighbours: only the vectors' sizes are set here
+  GmrfProblem& p = ws.problem;
+  p.unary_ground.resize(m), p.unary_nonground.resize(m), p.parity.resize(m);
+  p.next.resize(3 * m), p.prev.resize(3 * m), p.weight.resize(3 * m);
+  ws.rough.resize(m);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
     const auto& tile = layout.tiles()[t];
     layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
       const int x = tile.tx * k + lx, y = tile.ty * k + ly;
-      const double ground = planes[t].at((x + 0.5) * cell, (y + 0.5) * cell);
+      const double ground = ws.planes[t].at((x + 0.5) * cell, (y + 0.5) * cell);
       const bool on_edge = lx == 0 || ly == 0 || lx == k - 1 || ly == k - 1;
       for (auto q = b; q < e; ++q) {
         const float h = layout.height(q);
-        rough[q] = setUnary(p, q, h, x, y, layout.z(q), ground, cfg);
+        const bool g1 = setUnary(p, q, h, x, y, layout.z(q), ground, cfg);
+        for (int a = 0; a < 3; ++a) p.prev[3 * q + a] = GmrfProblem::kNone;
+        ws.rough[q] = g1;
         out.ground_height[layout.id(q)] = static_cast<float>(ground);
-        out.rough[layout.id(q)] = rough[q];
+        out.rough[layout.id(q)] = g1;
         if (on_edge) edge(q, t, lx, ly, h);
       }
     });
   });
-  return rough;
 }
 
-// The refined labels G1' of a problem, from its rough labels by the configured solver; sets the
-// result's energies and ICM sweeps.
-std::vector<std::uint8_t> refine(const GmrfProblem& p, const std::vector<std::uint8_t>& rough,
-                                 const GroundSegmentationConfig& cfg, SegmentationResult& out) {
-  std::vector<std::uint8_t> labels = rough;
-  out.energy_rough = gmrfEnergy(p, rough);
-  out.iterations = 0;
+// The refined labels G1' of the workspace's problem, from its rough labels by the configured
+// solver; sets the result's energies and ICM sweeps.
+void refine(Workspace& ws, const GroundSegmentationConfig& cfg, SegmentationResult& out) {
+  ws.labels = ws.rough;
   if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
-    solveMinCut(p, labels);
+    out.energy_rough = gmrfEnergy(ws.problem, ws.rough);
+    solveMinCut(ws.problem, ws.labels);
+    out.energy_refined = gmrfEnergy(ws.problem, ws.labels);
+    out.iterations = 0;
   } else {
-    out.iterations = solveIcm(p, labels, cfg.icm_iterations, cfg.threads);
+    // the problem is a grid's by construction (linkNeighbours): solved without solveIcm's check
+    tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+#ifndef NDEBUG
+    checkGrid(ws.problem, ws.labels.size(), arena);
+#endif
+    const IcmResult r = icm(ws.problem, ws.labels, cfg.icm_iterations, arena);
+    out.energy_rough = r.energy_initial, out.energy_refined = r.energy_final;
+    out.iterations = r.sweeps;
   }
-  out.energy_refined = gmrfEnergy(p, labels);
-  return labels;
+}
+
+// Segments every voxel of the map into out, working in ws.
+void segmentWhole(const VoxelMap& map, const GroundSegmentationConfig& cfg, Workspace& ws, SegmentationResult& out) {
+  const auto& voxels = map.voxels();
+  const std::size_t n = voxels.size();
+  // every voxel's entries are written below
+  out.rough.resize(n);
+  out.refined.resize(n);
+  out.ground_height.resize(n);
+  out.energy_rough = out.energy_refined = 0;
+  out.iterations = out.tiles = 0;
+  if (n == 0) return;
+  const double cell = map.voxelSize();
+  const int k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
+  const bool global = cfg.histogram == GroundSegmentationConfig::Histogram::Global;
+  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    ws.layout.build(voxels, k);
+    const std::size_t tiles = ws.layout.tiles().size();
+    // h1: one plane per tile, fitted through the plane-fit candidates of the tiles in its window
+    // and lifted to the peak of the window's heights above it; or one level for the whole map
+    if (global) {
+      std::vector<double> h(n);
+      for (std::size_t i = 0; i < n; ++i) h[i] = voxels[i].height;
+      ws.planes.assign(tiles, Plane{0, 0, histogramPeak(h, cfg.bin_size)});
+      out.tiles = 1;
+    } else {
+      tilePlanes(ws, tiles, cfg, cell);
+      out.tiles = static_cast<int>(tiles);
+    }
+    // the problem over positions of the layout
+    setUnaries(ws, tiles, cell, cfg, out, [](std::uint32_t, std::size_t, int, int, float) {});
+    ws.layout.linkNeighbours(ws.problem, cfg, tiles);
+    refine(ws, cfg, out);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) { out.refined[ws.layout.id(q)] = ws.labels[q]; });
+  });
 }
 
 }  // namespace
@@ -691,41 +914,24 @@ SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& 
 }
 
 SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmentationConfig& cfg) {
-  const auto& voxels = map.voxels();
-  const std::size_t n = voxels.size();
+  Workspace ws;
   SegmentationResult out;
-  out.rough.assign(n, 0);
-  out.refined.assign(n, 0);
-  out.ground_height.assign(n, 0.0f);
-  if (n == 0) return out;
-  const double cell = map.voxelSize();
-  const int k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
-  const bool global = cfg.histogram == GroundSegmentationConfig::Histogram::Global;
-  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    const TileLayout layout(voxels, k);
-    const std::size_t tiles = layout.tiles().size();
-    // h1: one plane per tile, fitted through the plane-fit candidates of the tiles in its window
-    // and lifted to the peak of the window's heights above it; or one level for the whole map
-    std::vector<Plane> planes;
-    if (global) {
-      std::vector<double> h(n);
-      for (std::size_t i = 0; i < n; ++i) h[i] = voxels[i].height;
-      planes.assign(tiles, Plane{0, 0, histogramPeak(h, cfg.bin_size)});
-      out.tiles = 1;
-    } else {
-      planes = tilePlanes(layout, tiles, cfg, cell);
-      out.tiles = static_cast<int>(tiles);
-    }
-    // the problem over positions of the layout
-    GmrfProblem p;
-    const std::vector<std::uint8_t> rough =
-        setUnaries(layout, tiles, planes, cell, cfg, p, out, [](std::uint32_t, std::size_t, int, int, float) {});
-    layout.linkNeighbours(p, cfg, tiles);
-    const std::vector<std::uint8_t> labels = refine(p, rough, cfg, out);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) { out.refined[layout.id(q)] = labels[q]; });
-  });
+  segmentWhole(map, cfg, ws, out);
   return out;
+}
+
+struct GroundSegmenter::Work {
+  Workspace ws;
+};
+
+GroundSegmenter::GroundSegmenter(const GroundSegmentationConfig& config)
+    : config_(config), work_(std::make_unique<Work>()) {}
+
+GroundSegmenter::~GroundSegmenter() = default;
+
+const SegmentationResult& GroundSegmenter::segment(const VoxelMap& map) {
+  segmentWhole(map, config_, work_->ws, result_);
+  return result_;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -753,7 +959,7 @@ struct IncrementalGroundSegmentation::State {
   std::size_t taken = 0;  // voxels already placed in tiles
   SegmentationResult result;
   Stats stats;
-  GmrfProblem problem;  // the last update's subproblem, kept so that its memory is reused
+  Workspace work;  // the last update's layout and subproblem, kept so that their memory is reused
 
   void setCell(double voxel_size) {
     if (cell == voxel_size) return;
@@ -873,11 +1079,13 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   const int k = st.k;
   tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    const TileLayout layout(voxels, k, tiles, tile_ids);
-    const std::vector<Plane> planes = tilePlanes(layout, count, cfg, st.cell);
+    Workspace& ws = st.work;
+    ws.layout.build(voxels, k, tiles, tile_ids);
+    const TileLayout& layout = ws.layout;
+    tilePlanes(ws, count, cfg, st.cell);
     // the subproblem: every voxel of the refitted tiles, the first positions of the layout.
     // Neighbours in tiles outside it keep their labels: their pair terms become unary terms.
-    GmrfProblem& p = st.problem;
+    GmrfProblem& p = ws.problem;
     const auto fixed = [&](std::uint32_t q, std::size_t t, int lx, int ly, float h) {
       const TileLayout::Tile& tile = tiles[t];
       for (const VoxelIndex& d4 :
@@ -894,15 +1102,15 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
         p.unary_nonground[q] += ground_j ? w : -w;
       }
     };
-    const std::vector<std::uint8_t> rough = setUnaries(layout, count, planes, st.cell, cfg, p, out, fixed);
-    const std::size_t m = rough.size();
+    setUnaries(ws, count, st.cell, cfg, out, fixed);
+    const std::size_t m = ws.rough.size();
     st.stats.voxels = m;
     layout.linkNeighbours(p, cfg, count);
-    const std::vector<std::uint8_t> labels = refine(p, rough, cfg, out);
+    refine(ws, cfg, out);
     out.tiles = static_cast<int>(st.tiles.size());
     for (std::size_t q = 0; q < m; ++q) {
-      out.refined[layout.id(q)] = labels[q];
-      voxels[layout.id(q)].label = labels[q] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+      out.refined[layout.id(q)] = ws.labels[q];
+      voxels[layout.id(q)].label = ws.labels[q] ? VoxelLabel::Ground : VoxelLabel::NonGround;
     }
   });
 }

@@ -92,12 +92,22 @@ struct GmrfProblem {
   }
 };
 
+// The pair-site weight beta + gamma e^{-|a - b|} of two neighbouring voxels of heights a and b [m]
+// (Eqs. 21-22), in single precision.
+float pairWeight(const GroundSegmentationConfig& config, float a, float b);
+
 // Energy U(f|d) of a labelling (true = ground), Eq. 18.
 double gmrfEnergy(const GmrfProblem& problem, const std::vector<std::uint8_t>& ground);
-// ICM from an initial labelling; returns the sweeps used. Throws std::invalid_argument if the
-// problem's graph is not a grid's (a node linked forward from two along one axis, or a pair of
-// equal parity).
-int solveIcm(const GmrfProblem& problem, std::vector<std::uint8_t>& ground, int max_iterations, int threads);
+struct IcmResult {
+  int sweeps = 0;  // sweeps that changed a label
+  // U(f|d) of the labelling given and of the one returned
+  double energy_initial = 0, energy_final = 0;
+};
+// ICM from an initial labelling, red-black in place: a first sweep over every node, then sweeps
+// over only the nodes next to one that changed (the labels of full sweeps, at a fraction of the
+// cost). The energies are summed on the way. Throws std::invalid_argument if the problem's graph
+// is not a grid's (a node linked forward from two along one axis, or a pair of equal parity).
+IcmResult solveIcm(const GmrfProblem& problem, std::vector<std::uint8_t>& ground, int max_iterations, int threads);
 // Exact minimum by s-t min-cut.
 void solveMinCut(const GmrfProblem& problem, std::vector<std::uint8_t>& ground);
 
@@ -144,6 +154,27 @@ class IncrementalGroundSegmentation {
 
 // Segments every voxel of the map; the map is not changed.
 SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmentationConfig& config);
+
+// Segments whole maps as segmentGroundLabels does, keeping its working memory from one call to
+// the next: a robot that re-segments its map as it grows allocates nothing new once the map stops
+// growing.
+class GroundSegmenter {
+ public:
+  explicit GroundSegmenter(const GroundSegmentationConfig& config);
+  ~GroundSegmenter();
+  GroundSegmenter(const GroundSegmenter&) = delete;
+  GroundSegmenter& operator=(const GroundSegmenter&) = delete;
+
+  // Segments every voxel of the map (not changed); the result stays valid until the next call.
+  const SegmentationResult& segment(const VoxelMap& map);
+
+ private:
+  struct Work;
+  GroundSegmentationConfig config_;
+  std::unique_ptr<Work> work_;
+  SegmentationResult result_;
+};
+
 // Segments every voxel of the map and writes the refined labels into the voxels.
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& config);
 

@@ -118,6 +118,95 @@ TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {
   }
 }
 
+TEST(GroundSegmentationTest, PairWeightFollowsTheExponentialOfTheHeightDifference) {
+  GroundSegmentationConfig cfg;
+  cfg.beta = 0, cfg.gamma = 2.0;
+  double worst = 0;
+  for (int i = 0; i <= 200000; ++i) {
+    const float d = i * 1e-4f;  // 0 .. 20 m
+    const double exact = cfg.gamma * std::exp(-static_cast<double>(d));
+    worst = std::max(worst, std::abs(pairWeight(cfg, 0.0f, d) - exact) / exact);
+    EXPECT_EQ(pairWeight(cfg, 3.0f, 3.0f + d), pairWeight(cfg, 3.0f + d, 3.0f));
+  }
+  EXPECT_LT(worst, 2e-7);
+  cfg.beta = 0.25;
+  EXPECT_FLOAT_EQ(pairWeight(cfg, 0.0f, 1.0f), 0.25f + 2.0f * std::exp(-1.0f));
+  EXPECT_FLOAT_EQ(pairWeight(cfg, 0.0f, 120.0f), 0.25f);
+  EXPECT_FLOAT_EQ(pairWeight(cfg, 0.0f, std::numeric_limits<float>::infinity()), 0.25f);
+  EXPECT_TRUE(std::isnan(pairWeight(cfg, 0.0f, std::numeric_limits<float>::quiet_NaN())));
+}
+
+// the energies ICM sums during its sweeps are those of the labellings it starts from and returns,
+// whether it converges, runs out of sweeps or makes none
+TEST(GroundSegmentationTest, IcmReportsTheEnergiesOfItsFirstAndLastLabelling) {
+  const GmrfProblem p = randomProblem(5000, 4);
+  Random rng(5);
+  std::vector<std::uint8_t> start(5000);
+  for (auto& l : start) l = rng.uniform(0, 1) < 0.5;
+  for (const int max_sweeps : {50, 1, 0}) {
+    std::vector<std::uint8_t> labels = start;
+    const IcmResult r = solveIcm(p, labels, max_sweeps, 2);
+    const double initial = gmrfEnergy(p, start), final = gmrfEnergy(p, labels);
+    EXPECT_NEAR(r.energy_initial, initial, 1e-9) << max_sweeps << " sweeps";
+    EXPECT_NEAR(r.energy_final, final, 1e-9) << max_sweeps << " sweeps";
+    if (max_sweeps == 50) {
+      EXPECT_LT(r.sweeps, 50);
+      EXPECT_LT(final, initial - 100);
+    } else {
+      EXPECT_EQ(r.sweeps, max_sweeps);
+    }
+  }
+}
+
+// after its first sweep ICM only revisits nodes next to a change: the labels and sweeps must be
+// those of plain red-black sweeps over every node
+TEST(GroundSegmentationTest, IcmGivesTheLabelsOfFullSweeps) {
+  const GmrfProblem p = randomProblem(3000, 8);
+  Random rng(2);
+  std::vector<std::uint8_t> start(3000);
+  for (auto& l : start) l = rng.uniform(0, 1) < 0.5;
+  for (const int max_sweeps : {1, 2, 3, 50}) {
+    std::vector<std::uint8_t> plain = start;
+    int plain_sweeps = 0;
+    for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+      bool changed = false;
+      for (std::uint8_t colour = 0; colour < 2; ++colour) {
+        for (std::uint32_t v = 0; v < p.size(); ++v) {
+          if (p.parity[v] != colour) continue;
+          std::vector<std::uint8_t> with = plain;
+          with[v] = 1;
+          const double g = gmrfEnergy(p, with);
+          with[v] = 0;
+          const double ng = gmrfEnergy(p, with);
+          const std::uint8_t best = g < ng - 1e-9 ? 1 : (ng < g - 1e-9 ? 0 : plain[v]);
+          changed |= best != plain[v];
+          plain[v] = best;
+        }
+      }
+      if (!changed) break;
+      ++plain_sweeps;
+    }
+    if (max_sweeps == 50) {
+      EXPECT_GE(plain_sweeps, 3);  // revisits happen
+    }
+    std::vector<std::uint8_t> labels = start;
+    EXPECT_EQ(solveIcm(p, labels, max_sweeps, 2).sweeps, plain_sweeps) << max_sweeps;
+    EXPECT_EQ(labels, plain) << max_sweeps;
+  }
+}
+
+TEST(GroundSegmentationTest, IcmRefusesAProblemThatIsNotAGrids) {
+  GmrfProblem same_colour = randomProblem(10, 3);
+  same_colour.link(4, 2, 6, 1.0f);  // nodes 4 and 6 are both of parity 0
+  std::vector<std::uint8_t> labels(10, 0);
+  EXPECT_THROW(solveIcm(same_colour, labels, 5, 1), std::invalid_argument);
+  GmrfProblem two_forward = randomProblem(10, 3);
+  two_forward.next[3 * 2 + 0] = 5;  // 2 -> 5 along x, but 5's backward neighbour along x is 4
+  EXPECT_THROW(solveIcm(two_forward, labels, 5, 1), std::invalid_argument);
+  EXPECT_EQ(labels, std::vector<std::uint8_t>(10, 0));
+  EXPECT_NO_THROW(solveIcm(randomProblem(10, 3), labels, 5, 1));
+}
+
 TEST(GroundSegmentationTest, IcmGivesTheSameLabelsWhateverTheThreadCount) {
   const GmrfProblem p = randomProblem(5000, 9);
   std::vector<std::uint8_t> a(5000, 0), b(5000, 0);
