@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iostream>
 #include <sstream>
 #include <unordered_map>
 
@@ -97,9 +98,21 @@ void writePly(const fs::path& path, const Pipeline& p, const OutputMesh& mesh) {
   io::writeFileAtomic(path, s, true);
 }
 
-// grid covering the mesh: cell bounds and the vertex per grid position
+// images over the mesh (texture, height maps) are at most this many pixels either way
+constexpr std::int64_t kMaxPixels = 4096;
+
+// The grid of the images drawn over the mesh: the cells it spans, and how many cells a pixel
+// covers each way (one, unless the mesh spans more than kMaxPixels cells either way).
 struct Grid {
-  int x0 = 0, y0 = 0, width = 0, height = 0;
+  int x0 = 0, y0 = 0;                 // lowest cell
+  std::int64_t width = 0, height = 0;  // cells spanned
+  int step = 1;                       // cells per pixel each way
+  int cols() const { return static_cast<int>((width + step - 1) / step); }
+  int rows() const { return static_cast<int>((height + step - 1) / step); }
+  int col(const CellIndex& c) const { return static_cast<int>((static_cast<std::int64_t>(c.x()) - x0) / step); }
+  int row(const CellIndex& c) const {
+    return rows() - 1 - static_cast<int>((static_cast<std::int64_t>(c.y()) - y0) / step);
+  }
 };
 
 Grid gridOf(const OutputMesh& mesh) {
@@ -108,16 +121,25 @@ Grid gridOf(const OutputMesh& mesh) {
   int x0 = mesh.cells[0].x(), x1 = x0, y0 = mesh.cells[0].y(), y1 = y0;
   for (const auto& c : mesh.cells) x0 = std::min(x0, c.x()), x1 = std::max(x1, c.x()), y0 = std::min(y0, c.y()), y1 = std::max(y1, c.y());
   g.x0 = x0, g.y0 = y0;
-  g.width = x1 - x0 + 1;
-  g.height = y1 - y0 + 1;
+  g.width = static_cast<std::int64_t>(x1) - x0 + 1;
+  g.height = static_cast<std::int64_t>(y1) - y0 + 1;
+  g.step = static_cast<int>((std::max(g.width, g.height) + kMaxPixels - 1) / kMaxPixels);
   return g;
+}
+
+// " (S m per pixel)" when a pixel covers more than one cell
+std::string scaleNote(const Grid& g, double cell) {
+  if (g.step == 1) return "";
+  std::ostringstream s;
+  s << ", " << g.step * cell << " m per pixel";
+  return s.str();
 }
 
 void writeObj(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
   const double cell = p.map().voxelSize();
   const Grid g = gridOf(mesh);
-  // texture: one texel per cell, north up
-  cv::Mat tex(std::max(1, g.height), std::max(1, g.width), CV_8UC3, cv::Scalar(0, 220, 255));
+  // texture: one texel per cell (per step x step cells on a wide mesh), north up
+  cv::Mat tex(std::max(1, g.rows()), std::max(1, g.cols()), CV_8UC3, cv::Scalar(0, 220, 255));
   std::ostringstream obj;
   obj << "# terrain reconstruction, world ENU [m]\nmtllib mesh.mtl\nusemtl terrain\n";
   char line[128];
@@ -125,13 +147,12 @@ void writeObj(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
     const CellIndex& c = mesh.cells[i];
     std::snprintf(line, sizeof line, "v %.3f %.3f %.3f\n", (c.x() + 0.5) * cell, (c.y() + 0.5) * cell, mesh.heights[i]);
     obj << line;
-    const int col = c.x() - g.x0, row = g.height - 1 - (c.y() - g.y0);
     const auto& rgb = mesh.colours[i];
-    tex.at<cv::Vec3b>(row, col) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);
+    tex.at<cv::Vec3b>(g.row(c), g.col(c)) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);
   }
   for (const auto& c : mesh.cells) {
-    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", (c.x() - g.x0 + 0.5) / std::max(1, g.width),
-                  (c.y() - g.y0 + 0.5) / std::max(1, g.height));
+    std::snprintf(line, sizeof line, "vt %.6f %.6f\n", (c.x() - g.x0 + 0.5) / (static_cast<double>(g.cols()) * g.step),
+                  (c.y() - g.y0 + 0.5) / (static_cast<double>(g.rows()) * g.step));
     obj << line;
   }
   for (const auto& t : mesh.triangles) obj << "f " << t[0] + 1 << '/' << t[0] + 1 << ' ' << t[1] + 1 << '/' << t[1] + 1 << ' ' << t[2] + 1 << '/' << t[2] + 1 << '\n';
@@ -235,24 +256,34 @@ void writeReconstruction(const fs::path& dir, const Pipeline& p) {
   // height maps before and after recovery, on one colour scale; the roofs of completed footprints
   // only after
   const Grid g = gridOf(mesh);
+  nlohmann::json w = p.warnings();
   if (g.width > 0) {
-    cv::Mat before(g.height, g.width, CV_32FC1, cv::Scalar(std::nanf(""))), after = before.clone();
+    const double cell = p.map().voxelSize();
+    if (g.step > 1) {
+      std::ostringstream m;
+      m << "the mesh spans " << g.width * cell << " x " << g.height * cell << " m: its texture and height maps are drawn at "
+        << g.step * cell << " m per pixel (the highest cell of each pixel's in the height maps)";
+      w.push_back(m.str());
+      std::cerr << "warning: " << m.str() << "\n";
+    }
+    // the highest cell of each pixel
+    const auto raise = [](float& px, float h) { px = std::isnan(px) ? h : std::max(px, h); };
+    cv::Mat before(g.rows(), g.cols(), CV_32FC1, cv::Scalar(std::nanf(""))), after = before.clone();
     double lo = 1e9, hi = -1e9;
     for (const auto& m : p.mesh().vertices()) {
-      const int col = m.cell.x() - g.x0, row = g.height - 1 - (m.cell.y() - g.y0);
-      before.at<float>(row, col) = m.sensed_height;
-      after.at<float>(row, col) = m.height();
+      raise(before.at<float>(g.row(m.cell), g.col(m.cell)), m.sensed_height);
+      raise(after.at<float>(g.row(m.cell), g.col(m.cell)), m.height());
       lo = std::min(lo, static_cast<double>(m.sensed_height));
       hi = std::max(hi, static_cast<double>(m.height()));
     }
     for (const auto& r : p.roofCells()) {
-      after.at<float>(g.height - 1 - (r.cell.y() - g.y0), r.cell.x() - g.x0) = r.height;
+      raise(after.at<float>(g.row(r.cell), g.col(r.cell)), r.height);
       hi = std::max(hi, static_cast<double>(r.height));
     }
-    writePng(dir / "height_before.png", renderHeightMap(before, lo, hi, "height, sensed only (north up)"));
-    writePng(dir / "height_after.png", renderHeightMap(after, lo, hi, "height after 3D boundary estimation and footprint completion"));
+    writePng(dir / "height_before.png", renderHeightMap(before, lo, hi, "height, sensed only (north up" + scaleNote(g, cell) + ")"));
+    writePng(dir / "height_after.png",
+             renderHeightMap(after, lo, hi, "height after 3D boundary estimation and footprint completion" + scaleNote(g, cell)));
   }
-  nlohmann::json w = p.warnings();
   io::writeFileAtomic(dir / "warnings.json", w.dump(1) + "\n", true);
 }
 

@@ -20,7 +20,8 @@ bool skyAbove(const cv::Mat& rgb, int u, int top, const BoundaryEstimationConfig
     r += p[0], g += p[1], b += p[2], ++n;
   }
   if (n == 0) return false;
-  const cv::Vec3b mean(static_cast<std::uint8_t>(r / n), static_cast<std::uint8_t>(g / n), static_cast<std::uint8_t>(b / n));
+  const cv::Vec3b mean(static_cast<std::uint8_t>(r / n), static_cast<std::uint8_t>(g / n),
+                       static_cast<std::uint8_t>(b / n));
   return looksLikeSky(mean, cfg.sky_blue_margin, cfg.sky_min_brightness);
 }
 
@@ -35,13 +36,17 @@ bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
   return b >= r + blue_margin && b >= g && (r + g + b) / 3 >= min_brightness;
 }
 
-MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map) {
+MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d* region) {
   const auto& vertices = mesh.vertices();
+  const double cell = map.voxelSize();
   MeshObjects out;
   out.of.assign(vertices.size(), -1);
   std::vector<std::uint32_t> group;
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
+    if (region &&
+        !region->contains(Eigen::Vector2d((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)))
+      continue;
     const std::int32_t id = out.count++;
     group.assign(1, i);
     out.of[i] = id;
@@ -60,10 +65,21 @@ MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map) {
   return out;
 }
 
-SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, double grid_size)
-    : objects_(findMeshObjects(mesh, map)), size_(grid_size) {
+SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::Vector2d& centre, double reach,
+                             double grid_size)
+    : size_(grid_size) {
   const auto& vertices = mesh.vertices();
-  if (vertices.empty()) return;
+  if (vertices.empty() || !(reach >= 0) || !std::isfinite(reach) || !centre.allFinite() || !(grid_size > 0)) return;
+  // the cells that cover the square, aligned with the mesh's lowest corner
+  const double cell = map.voxelSize();
+  const CellIndex lo = mesh.cellBounds().first;
+  const double ox = lo.x() * cell, oy = lo.y() * cell;
+  x0_ = ox + std::floor((centre.x() - reach - ox) / size_) * size_;
+  y0_ = oy + std::floor((centre.y() - reach - oy) / size_) * size_;
+  nx_ = static_cast<int>(std::floor((centre.x() + reach - x0_) / size_)) + 1;
+  ny_ = static_cast<int>(std::floor((centre.y() + reach - y0_) / size_)) + 1;
+  const Eigen::AlignedBox2d grid(Eigen::Vector2d(x0_, y0_), Eigen::Vector2d(x0_ + nx_ * size_, y0_ + ny_ * size_));
+  objects_ = findMeshObjects(mesh, map, &grid);
   // each object's known top: its highest recovered height, unknown (+inf) before any estimate
   tops_.assign(objects_.count, -std::numeric_limits<double>::infinity());
   for (std::size_t j = 0; j < vertices.size(); ++j) {
@@ -75,26 +91,24 @@ SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, doubl
     if (!std::isfinite(top)) top = std::numeric_limits<double>::infinity();
   }
   // which object stands where
-  const double cell = map.voxelSize();
-  const auto [lo, hi] = mesh.cellBounds();
-  x0_ = lo.x() * cell, y0_ = lo.y() * cell;
-  nx_ = static_cast<int>((hi.x() - lo.x() + 1) * cell / size_) + 1;
-  ny_ = static_cast<int>((hi.y() - lo.y() + 1) * cell / size_) + 1;
   cells_.assign(static_cast<std::size_t>(nx_) * ny_, kEmpty);
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     if (objects_.of[i] < 0) continue;
-    std::int32_t& c = cells_[index((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)];
+    const double x = (vertices[i].cell.x() + 0.5) * cell, y = (vertices[i].cell.y() + 0.5) * cell;
+    if (x < x0_ || y < y0_ || x >= x0_ + nx_ * size_ || y >= y0_ + ny_ * size_) continue;
+    std::int32_t& c = cells_[index(x, y)];
     c = (c == kEmpty || c == objects_.of[i]) ? objects_.of[i] : kMixed;
   }
 }
 
 std::size_t SkylineOwners::index(double x, double y) const {
-  const int gx = std::min(nx_ - 1, static_cast<int>((x - x0_) / size_)), gy = std::min(ny_ - 1, static_cast<int>((y - y0_) / size_));
+  const int gx = std::min(nx_ - 1, static_cast<int>((x - x0_) / size_)),
+            gy = std::min(ny_ - 1, static_cast<int>((y - y0_) / size_));
   return static_cast<std::size_t>(gy) * nx_ + gx;
 }
 
-bool SkylineOwners::otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
-                                double radius, double margin) const {
+bool SkylineOwners::otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own,
+                                const Eigen::Vector2d& centre, double radius, double margin) const {
   if (cells_.empty()) return false;
   const double h = dir.head<2>().norm();
   if (h < 1e-12) return false;
@@ -139,7 +153,7 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
   std::optional<SkylineOwners> owners;
-  if (cfg.clear_line) owners.emplace(mesh, map);
+  if (cfg.clear_line) owners.emplace(mesh, map, centre.head<2>(), cfg.max_distance);
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     MeshVertex& m = vertices[i];
     if (!nonGround(m, map)) continue;
@@ -162,7 +176,8 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
     if (owners) {
-      if (owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0, 1.0)) {
+      if (owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0,
+                              1.0)) {
         ++stats.not_clear;
         continue;
       }

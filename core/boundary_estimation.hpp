@@ -15,9 +15,9 @@
 namespace terrain {
 
 struct BoundaryEstimationConfig {
-  double max_distance = 100.0;   // [m] vertices farther from the camera are not estimated
-  double max_height = 60.0;      // [m] above the sensed top: larger estimates are rejected
-  int top_margin = 2;            // [px] a boundary this close to the image top may be cut: skipped
+  double max_distance = 100.0;     // [m] vertices farther from the camera are not estimated
+  double max_height = 60.0;        // [m] above the sensed top: larger estimates are rejected
+  int top_margin = 2;              // [px] a boundary this close to the image top may be cut: skipped
   std::size_t max_estimates = 15;  // estimates kept per vertex
   // The fused height is this quantile of the kept estimates. With sky just above the top boundary
   // (require_sky_above) an estimate bounds the vertex's height from above: were the object taller
@@ -59,24 +59,29 @@ struct BoundaryEstimationConfig {
 bool looksLikeSky(const cv::Vec3b& rgb, int blue_margin, int min_brightness);
 
 // The objects the lidar saw: 8-connected groups of mesh vertices whose top voxel is non-ground,
-// numbered in the order of their lowest vertex id.
+// numbered in the order of their lowest vertex id. With a region (world x, y [m]), only the
+// objects with a vertex whose cell centre lies in it, whole (also where they reach beyond it),
+// numbered in the order of their lowest vertex id in the region.
 struct MeshObjects {
-  std::vector<std::int32_t> of;  // per vertex: its object, -1 for a ground vertex
+  std::vector<std::int32_t> of;  // per vertex: its object, -1 for a ground vertex or one left out
   std::int32_t count = 0;        // objects
 };
-MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map);
+MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d* region = nullptr);
 
-// Which sensed object may own a skyline pixel (clear_line): the mesh's objects on a grid of
-// grid_size [m] cells, with each object's known top (its highest recovered height; unknown, +inf,
-// before any estimate).
+// Which sensed object may own a skyline pixel (clear_line): the objects of the mesh within reach of
+// the camera on a grid of grid_size [m] cells, with each object's known top (its highest
+// recovered height; unknown, +inf, before any estimate). Only the square of half-width reach [m]
+// around centre is gridded (cells aligned with the mesh's lowest corner), and only the objects with
+// a vertex in it are found: the cost follows the camera's reach, not the map's size.
 class SkylineOwners {
  public:
-  SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, double grid_size = 1.0);
+  SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::Vector2d& centre, double reach,
+                double grid_size = 1.0);
   const MeshObjects& objects() const { return objects_; }
   // Could the pixel whose ray (origin o, direction dir, world frame), followed up to `range` metres
   // horizontally, belong to an object other than `own`? It could where the ray, outside the disc
   // (centre, radius [m]), passes over a grid cell of another object (or of several) whose top is not
-  // at least `margin` [m] below the ray there.
+  // at least `margin` [m] below the ray there. Beyond the gridded square the ray passes nothing.
   bool otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
                    double radius, double margin) const;
 

@@ -11,13 +11,14 @@ namespace {
 
 // A trunk-sized object: where it stands and how high the lidar saw it.
 struct Trunk {
-  std::uint32_t key = 0;   // its lowest vertex id
+  std::uint32_t key = 0;  // its lowest vertex id
   std::int32_t object = -1;
   Eigen::Vector2d centre;  // [m] mean of its cell centres
   double top = 0;          // [m] highest sensed height
 };
 
-std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects, double max_width) {
+std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects,
+                              double max_width) {
   const auto& vertices = mesh.vertices();
   const double cell = map.voxelSize();
   struct Extent {
@@ -33,7 +34,8 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
     Extent& e = extents[o];
     const CellIndex c = vertices[i].cell;
     if (e.n == 0) e.first = i, e.x0 = e.x1 = c.x(), e.y0 = e.y1 = c.y();
-    e.x0 = std::min(e.x0, c.x()), e.x1 = std::max(e.x1, c.x()), e.y0 = std::min(e.y0, c.y()), e.y1 = std::max(e.y1, c.y());
+    e.x0 = std::min(e.x0, c.x()), e.x1 = std::max(e.x1, c.x()), e.y0 = std::min(e.y0, c.y()),
+    e.y1 = std::max(e.y1, c.y());
     e.sum += Eigen::Vector2d((c.x() + 0.5) * cell, (c.y() + 0.5) * cell);
     e.top = std::max(e.top, static_cast<double>(vertices[i].sensed_height));
     ++e.n;
@@ -50,12 +52,15 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
 }  // namespace
 
 int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& k,
-                          const Pose& world_from_camera, const CrownConfig& cfg, const BoundaryEstimationConfig& sky_cfg) {
+                          const Pose& world_from_camera, const CrownConfig& cfg,
+                          const BoundaryEstimationConfig& sky_cfg) {
   if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty()) return 0;
-  const SkylineOwners owners(mesh, map);
-  const MeshObjects& objects = owners.objects();
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
+  // the objects within max_distance and a crown's radius of the camera (a square around it): the
+  // trunks measured, and what their clear lines may cross
+  const SkylineOwners owners(mesh, map, centre.head<2>(), sky_cfg.max_distance + cfg.max_radius);
+  const MeshObjects& objects = owners.objects();
   auto sky = [&](int u, int row) {
     return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);
   };
@@ -69,7 +74,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   for (std::size_t i = 0; i < trunks.size(); ++i) {
     const Point3 p = camera_from_world * Point3(trunks[i].centre.x(), trunks[i].centre.y(), trunks[i].top);
     const auto px = project(k, p);
-    if (px && px->x() < rgb.cols && px->y() < rgb.rows) views[i] = {static_cast<int>(px->x()), static_cast<int>(px->y()), p.z()};
+    if (px && px->x() < rgb.cols && px->y() < rgb.rows)
+      views[i] = {static_cast<int>(px->x()), static_cast<int>(px->y()), p.z()};
   }
   int measured = 0;
   for (std::size_t i = 0; i < trunks.size(); ++i) {
@@ -134,7 +140,8 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     if (it == samples_.end() || static_cast<int>(it->second.size()) < std::max(1, cfg.min_samples)) continue;
     // seen from far enough apart
     double baseline = 0;
-    for (const Sample& a : it->second) baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
+    for (const Sample& a : it->second)
+      baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
     if (baseline < cfg.min_baseline) continue;
     // the top: the median sample, if the samples agree (a taller crown behind the column in some
     // frames moves with parallax); the radius: the lower quartile (a run widened by a crown beside
@@ -148,7 +155,8 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     if (r < cfg.min_radius) continue;
     // the ground vertices (and the trunk's own) within the radius: a spherical cap topped at `top`
     const int reach = static_cast<int>(std::ceil(r / cell));
-    const CellIndex c0(static_cast<int>(std::floor(t.centre.x() / cell)), static_cast<int>(std::floor(t.centre.y() / cell)));
+    const CellIndex c0(static_cast<int>(std::floor(t.centre.x() / cell)),
+                       static_cast<int>(std::floor(t.centre.y() / cell)));
     for (int dy = -reach; dy <= reach; ++dy) {
       for (int dx = -reach; dx <= reach; ++dx) {
         const std::int64_t j = mesh.find(c0 + CellIndex(dx, dy));
