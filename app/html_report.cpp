@@ -152,6 +152,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   }
   h << "</table><h3>Height map over object cells</h3><table><tr><th>method</th><th>coverage</th><th>MAE m</th><th>bias m</th></tr>";
   for (const char* m : {"sensed_only", "inpainting", "boundary_estimation"}) {
+    if (!r["height_baselines"].contains(m)) continue;
     const auto& b = r["height_baselines"][m];
     h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(b["coverage"]) << "</td><td>" << fmt(b["mae_m"]) << "</td><td>"
       << fmt(b["bias_m"]) << "</td></tr>";

@@ -48,7 +48,8 @@ OutputMesh outputMesh(const Pipeline& p) {
   auto key = [](const CellIndex& c) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
   };
-  auto add = [&](const CellIndex& c, float h, std::array<std::uint8_t, 3> colour, bool unseen, bool recovered, bool inferred) {
+  auto add = [&](const CellIndex& c, float h, std::array<std::uint8_t, 3> colour, bool unseen, bool recovered,
+                 bool inferred) {
     index.emplace(key(c), static_cast<std::uint32_t>(out.cells.size()));
     out.cells.push_back(c);
     out.heights.push_back(h);
@@ -76,11 +77,14 @@ void append(std::string& s, T v) {
 void writePly(const fs::path& path, const Pipeline& p, const OutputMesh& mesh) {
   const double cell = p.map().voxelSize();
   std::ostringstream h;
-  h << "ply\nformat binary_little_endian 1.0\ncomment terrain reconstruction, world ENU [m]; unseen = never in a camera image; "
+  h << "ply\nformat binary_little_endian 1.0\ncomment terrain reconstruction, world ENU [m]; unseen = never in a "
+       "camera image; "
        "inferred = roof of a completed building footprint, not sensed\n"
     << "element vertex " << mesh.cells.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
-    << "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar unseen\nproperty uchar recovered\n"
-    << "property uchar inferred\nelement face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    << "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar unseen\nproperty uchar "
+       "recovered\n"
+    << "property uchar inferred\nelement face " << mesh.triangles.size()
+    << "\nproperty list uchar int vertex_indices\nend_header\n";
   std::string s = h.str();
   for (std::size_t i = 0; i < mesh.cells.size(); ++i) {
     append(s, static_cast<float>((mesh.cells[i].x() + 0.5) * cell));
@@ -104,9 +108,9 @@ constexpr std::int64_t kMaxPixels = 4096;
 // The grid of the images drawn over the mesh: the cells it spans, and how many cells a pixel
 // covers each way (one, unless the mesh spans more than kMaxPixels cells either way).
 struct Grid {
-  int x0 = 0, y0 = 0;                 // lowest cell
+  int x0 = 0, y0 = 0;                  // lowest cell
   std::int64_t width = 0, height = 0;  // cells spanned
-  int step = 1;                       // cells per pixel each way
+  int step = 1;                        // cells per pixel each way
   int cols() const { return static_cast<int>((width + step - 1) / step); }
   int rows() const { return static_cast<int>((height + step - 1) / step); }
   int col(const CellIndex& c) const { return static_cast<int>((static_cast<std::int64_t>(c.x()) - x0) / step); }
@@ -119,7 +123,8 @@ Grid gridOf(const OutputMesh& mesh) {
   Grid g;
   if (mesh.cells.empty()) return g;
   int x0 = mesh.cells[0].x(), x1 = x0, y0 = mesh.cells[0].y(), y1 = y0;
-  for (const auto& c : mesh.cells) x0 = std::min(x0, c.x()), x1 = std::max(x1, c.x()), y0 = std::min(y0, c.y()), y1 = std::max(y1, c.y());
+  for (const auto& c : mesh.cells)
+    x0 = std::min(x0, c.x()), x1 = std::max(x1, c.x()), y0 = std::min(y0, c.y()), y1 = std::max(y1, c.y());
   g.x0 = x0, g.y0 = y0;
   g.width = static_cast<std::int64_t>(x1) - x0 + 1;
   g.height = static_cast<std::int64_t>(y1) - y0 + 1;
@@ -155,7 +160,9 @@ void writeObj(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
                   (c.y() - g.y0 + 0.5) / (static_cast<double>(g.rows()) * g.step));
     obj << line;
   }
-  for (const auto& t : mesh.triangles) obj << "f " << t[0] + 1 << '/' << t[0] + 1 << ' ' << t[1] + 1 << '/' << t[1] + 1 << ' ' << t[2] + 1 << '/' << t[2] + 1 << '\n';
+  for (const auto& t : mesh.triangles)
+    obj << "f " << t[0] + 1 << '/' << t[0] + 1 << ' ' << t[1] + 1 << '/' << t[1] + 1 << ' ' << t[2] + 1 << '/'
+        << t[2] + 1 << '\n';
   io::writeFileAtomic(dir / "mesh.obj", obj.str(), true);
   io::writeFileAtomic(dir / "mesh.mtl", "newmtl terrain\nKa 1 1 1\nKd 1 1 1\nmap_Kd mesh_texture.png\n", true);
   writePng(dir / "mesh_texture.png", tex);
@@ -228,7 +235,8 @@ cv::Mat renderHeightMap(const cv::Mat& heights, double lo, double hi, const std:
     const int y = top + (bh - 1) * k / 4;
     char label[32];
     std::snprintf(label, sizeof label, "%.1f m", hi - (hi - lo) * k / 4.0);
-    cv::putText(canvas, label, cv::Point(bx + bar_w + 4, y + 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1);
+    cv::putText(canvas, label, cv::Point(bx + bar_w + 4, y + 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0),
+                1);
   }
   return canvas;
 }
@@ -261,8 +269,9 @@ void writeReconstruction(const fs::path& dir, const Pipeline& p) {
     const double cell = p.map().voxelSize();
     if (g.step > 1) {
       std::ostringstream m;
-      m << "the mesh spans " << g.width * cell << " x " << g.height * cell << " m: its texture and height maps are drawn at "
-        << g.step * cell << " m per pixel (the highest cell of each pixel's in the height maps)";
+      m << "the mesh spans " << g.width * cell << " x " << g.height * cell
+        << " m: its texture and height maps are drawn at " << g.step * cell
+        << " m per pixel (in the height maps each pixel shows its highest cell)";
       w.push_back(m.str());
       std::cerr << "warning: " << m.str() << "\n";
     }
@@ -280,9 +289,11 @@ void writeReconstruction(const fs::path& dir, const Pipeline& p) {
       raise(after.at<float>(g.row(r.cell), g.col(r.cell)), r.height);
       hi = std::max(hi, static_cast<double>(r.height));
     }
-    writePng(dir / "height_before.png", renderHeightMap(before, lo, hi, "height, sensed only (north up" + scaleNote(g, cell) + ")"));
+    writePng(dir / "height_before.png",
+             renderHeightMap(before, lo, hi, "height, sensed only (north up" + scaleNote(g, cell) + ")"));
     writePng(dir / "height_after.png",
-             renderHeightMap(after, lo, hi, "height after 3D boundary estimation and footprint completion" + scaleNote(g, cell)));
+             renderHeightMap(after, lo, hi,
+                             "height after 3D boundary estimation and footprint completion" + scaleNote(g, cell)));
   }
   io::writeFileAtomic(dir / "warnings.json", w.dump(1) + "\n", true);
 }

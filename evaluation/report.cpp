@@ -207,8 +207,16 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   r["height_baselines"] = json::object();
   {
     const auto& verts = pipeline.mesh().vertices();
-    if (!verts.empty()) {
-      const auto [lo, hi] = pipeline.mesh().cellBounds();
+    // a height map per cell over the mesh's extent, inpainted: not over a mesh wider than this
+    constexpr std::int64_t kMaxCells = 4096;
+    const auto [lo, hi] =
+        verts.empty() ? std::make_pair(CellIndex(0, 0), CellIndex(0, 0)) : pipeline.mesh().cellBounds();
+    const std::int64_t span =
+        std::max(static_cast<std::int64_t>(hi.x()) - lo.x(), static_cast<std::int64_t>(hi.y()) - lo.y()) + 1;
+    if (span > kMaxCells) {
+      r["height_baselines"]["skipped"] = "the mesh spans " + std::to_string(span) + " cells, more than " +
+                                         std::to_string(kMaxCells) + ": no height map over its extent";
+    } else if (!verts.empty()) {
       const int x0 = lo.x(), y0 = lo.y(), x1 = hi.x(), y1 = hi.y();
       cv::Mat sensed(y1 - y0 + 1, x1 - x0 + 1, CV_32FC1, cv::Scalar(std::nanf(""))), recovered = sensed.clone();
       for (const auto& v : verts) {
