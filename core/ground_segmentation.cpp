@@ -49,7 +49,9 @@ class PeakHistogram {
   // adds h[i] - offset for i in [0, n)
   template <class T>
   void add(const T* h, std::size_t n, double offset) {
-    // the bin of h - offset is floor((h - offset) / bin_size) - first_, clamped (NaN to the first)
+    // the bin of h - offset is floor((h - offset) / bin_size) - first_, clamped (NaN to the first);
+    // successive heights, mostly in one bin, go to different lanes: no chain of dependent
+    // read-modify-writes on one counter
     const double shift = offset * inv_ + first_, last = bins_ - 1, below = offset + base_;
     int lane = lane_;
     for (std::size_t i = 0; i < n; ++i) {
@@ -98,8 +100,6 @@ class PeakHistogram {
     for (int l = 0; l < kLanes; ++l) c += count_[kLanes * b + l];
     return c;
   }
-  // successive heights, mostly in one bin, go to different lanes: no chain of dependent
-  // read-modify-writes on one counter
   double inv_ = 10, base_ = 0;
   int first_ = 0, bins_ = 0, lane_ = 0;
   std::vector<std::int32_t> count_;
