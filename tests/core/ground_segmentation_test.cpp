@@ -326,6 +326,29 @@ TEST(GroundSegmentationTest, SameResultWhateverTheThreadCount) {
   }
 }
 
+// A segmenter reuses its memory from call to call without carrying anything over: a large map,
+// a smaller different one, an empty one and the large one again each give what a fresh
+// segmentation gives.
+TEST(GroundSegmentationTest, ASegmenterGivesWhatAFreshSegmentationGives) {
+  VoxelMap large(VoxelMapConfig{0.2}), small(VoxelMapConfig{0.2}), empty(VoxelMapConfig{0.2});
+  for (const auto& strip : strips()) large.insert(strip, 0);
+  small.insert(strips()[1], 0);
+  ASSERT_LT(small.size(), large.size() / 2);
+  GroundSegmenter segmenter(GroundSegmentationConfig{});
+  for (const VoxelMap* map : {&large, &small, &empty, &large}) {
+    const SegmentationResult fresh = segmentGroundLabels(*map, GroundSegmentationConfig{});
+    const SegmentationResult& again = segmenter.segment(*map);
+    EXPECT_EQ(again.rough, fresh.rough);
+    EXPECT_EQ(again.refined, fresh.refined);
+    EXPECT_EQ(again.ground_height, fresh.ground_height);
+    EXPECT_EQ(again.energy_rough, fresh.energy_rough);
+    EXPECT_EQ(again.energy_refined, fresh.energy_refined);
+    EXPECT_EQ(again.iterations, fresh.iterations);
+    EXPECT_EQ(again.tiles, fresh.tiles);
+    EXPECT_EQ(again.refined.size(), map->size());
+  }
+}
+
 TEST(IncrementalGroundSegmentationTest, SameLabelsWhateverTheThreadCount) {
   std::vector<std::uint8_t> labels[2];
   for (int threads : {1, 2}) {
