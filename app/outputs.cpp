@@ -132,7 +132,7 @@ Grid gridOf(const OutputMesh& mesh) {
   return g;
 }
 
-// " (S m per pixel)" when a pixel covers more than one cell
+// ", S m per pixel" when a pixel covers more than one cell, for the height maps' titles
 std::string scaleNote(const Grid& g, double cell) {
   if (g.step == 1) return "";
   std::ostringstream s;

@@ -67,8 +67,10 @@ TEST(BoundaryDetectionTest, ErosionInAllDirectionsKeepsASlopingEdge) {
     EXPECT_EQ(on_edge(b.raw), 61);
     // kept in every column of it when eroding along all directions; a horizontal-only erosion
     // leaves nothing of a 45-degree edge one pixel wide per row
-    if (all) EXPECT_EQ(on_edge(b.cleaned), 61);
-    else EXPECT_LT(on_edge(b.cleaned), 10);
+    if (all)
+      EXPECT_EQ(on_edge(b.cleaned), 61);
+    else
+      EXPECT_LT(on_edge(b.cleaned), 10);
     // the specks go either way
     EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(30, 10, 20, 20))), 0) << all;
     EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(280, 20, 20, 20))), 0) << all;
@@ -186,43 +188,6 @@ TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
   }
 }
 
-// Object A: a 20 m wall of non-ground cells along +x from the camera at the origin; a gap of
-// ground; object B, 30-32 m away. Gridded within 10 m of the camera, A is found whole (also its
-// cells beyond 10 m) and B not at all.
-TEST(BoundaryEstimationTest, SkylineOwnersKnowOnlyTheObjectsWithinReachButThemWhole) {
-  VoxelMap map(VoxelMapConfig{0.2});
-  TerrainMesh mesh;
-  std::vector<Voxel> voxels;
-  std::vector<MeshVertex> vertices;
-  for (int x = 0; x <= 160; ++x) {
-    Voxel v;
-    v.index = VoxelIndex(x, 0, 10);
-    v.height = 2.0f;
-    v.label = x <= 100 || x >= 150 ? VoxelLabel::NonGround : VoxelLabel::Ground;
-    voxels.push_back(v);
-    MeshVertex m;
-    m.cell = CellIndex(x, 0);
-    m.top_voxel = static_cast<std::uint32_t>(x);
-    m.sensed_height = 2.0f;
-    vertices.push_back(m);
-  }
-  ASSERT_TRUE(map.restore(voxels));
-  ASSERT_TRUE(mesh.restore(vertices));
-  const SkylineOwners owners(mesh, map, Eigen::Vector2d(0, 0), 10.0);
-  ASSERT_EQ(owners.objects().count, 1);
-  EXPECT_EQ(owners.objects().of[0], 0);
-  EXPECT_EQ(owners.objects().of[100], 0);  // 20 m out, beyond the square: still A
-  EXPECT_EQ(owners.objects().of[120], -1);  // ground
-  EXPECT_EQ(owners.objects().of[155], -1);  // B, never reaching the square
-  // a ray along A (A's top unknown) may belong to A; one the other way passes nothing
-  const Point3 eye(-1.0, 0.1, 1.5);
-  EXPECT_TRUE(owners.otherMayOwn(eye, Vector3(1, 0, 0.01), 10.0, -1, Eigen::Vector2d(-5, 0), 0.5, 1.0));
-  EXPECT_FALSE(owners.otherMayOwn(eye, Vector3(1, 0, 0.01), 10.0, 0, Eigen::Vector2d(-5, 0), 0.5, 1.0));
-  EXPECT_FALSE(owners.otherMayOwn(eye, Vector3(-1, 0, 0.01), 10.0, -1, Eigen::Vector2d(-5, 0), 0.5, 1.0));
-  // the whole mesh within reach: B is found too
-  EXPECT_EQ(SkylineOwners(mesh, map, Eigen::Vector2d(0, 0), 40.0).objects().count, 2);
-}
-
 // a row of cells x = 0..6 at y = 0, each with one voxel; labels as given (1 ground, 2 non-ground)
 struct Row {
   VoxelMap map{VoxelMapConfig{}};
@@ -246,6 +211,32 @@ struct Row {
     EXPECT_TRUE(mesh.restore(vertices));
   }
 };
+
+// Object A: a 20 m wall of non-ground cells along +x from the camera at the origin; a gap of
+// ground; object B, 30-32 m away. Gridded within 10 m of the camera, A is found whole (also its
+// cells beyond 10 m) and B not at all.
+TEST(BoundaryEstimationTest, SkylineOwnersKnowOnlyTheObjectsWithinReachButThemWhole) {
+  std::vector<VoxelLabel> labels(161, VoxelLabel::Ground);
+  for (int x = 0; x <= 160; ++x) {
+    if (x <= 100 || x >= 150) labels[x] = VoxelLabel::NonGround;
+  }
+  const Row row(labels);
+  const TerrainMesh& mesh = row.mesh;
+  const VoxelMap& map = row.map;
+  const SkylineOwners owners(mesh, map, Eigen::Vector2d(0, 0), 10.0);
+  ASSERT_EQ(owners.objects().count, 1);
+  EXPECT_EQ(owners.objects().of[0], 0);
+  EXPECT_EQ(owners.objects().of[100], 0);   // 20 m out, beyond the square: still A
+  EXPECT_EQ(owners.objects().of[120], -1);  // ground
+  EXPECT_EQ(owners.objects().of[155], -1);  // B, never reaching the square
+  // a ray along A (A's top unknown) may belong to A; one the other way passes nothing
+  const Point3 eye(-1.0, 0.1, 1.5);
+  EXPECT_TRUE(owners.otherMayOwn(eye, Vector3(1, 0, 0.01), 10.0, -1, Eigen::Vector2d(-5, 0), 0.5, 1.0));
+  EXPECT_FALSE(owners.otherMayOwn(eye, Vector3(1, 0, 0.01), 10.0, 0, Eigen::Vector2d(-5, 0), 0.5, 1.0));
+  EXPECT_FALSE(owners.otherMayOwn(eye, Vector3(-1, 0, 0.01), 10.0, -1, Eigen::Vector2d(-5, 0), 0.5, 1.0));
+  // the whole mesh within reach: B is found too
+  EXPECT_EQ(SkylineOwners(mesh, map, Eigen::Vector2d(0, 0), 40.0).objects().count, 2);
+}
 
 TEST(BoundaryEstimationTest, EstimatesSpreadOverTheirObjectOnlyAndOnlySoFar) {
   const auto N = VoxelLabel::NonGround, G = VoxelLabel::Ground;
