@@ -22,18 +22,8 @@ std::unique_ptr<Pipeline> twoPatches(int apart) {
   std::vector<MeshVertex> vertices;
   for (const int x0 : {0, apart}) {
     for (int x = x0; x < x0 + 3; ++x) {
-      for (int y = 0; y < 3; ++y) {
-        Voxel v;
-        v.index = VoxelIndex(x, y, 5);
-        v.height = 1.1f + 0.01f * y;
-        v.label = VoxelLabel::Ground;
-        MeshVertex m;
-        m.cell = CellIndex(x, y);
-        m.top_voxel = static_cast<std::uint32_t>(voxels.size());
-        m.sensed_height = v.height;
-        voxels.push_back(v);
-        vertices.push_back(m);
-      }
+      for (int y = 0; y < 3; ++y)
+        test::addColumn(voxels, vertices, CellIndex(x, y), 5, 1.1f + 0.01f * y, VoxelLabel::Ground);
     }
   }
   SegmentationResult seg;

@@ -1,6 +1,7 @@
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
 #include "core/camera_model.hpp"
+#include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -195,18 +196,8 @@ struct Row {
   explicit Row(const std::vector<VoxelLabel>& labels) {
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
-    for (int x = 0; x < static_cast<int>(labels.size()); ++x) {
-      Voxel v;
-      v.index = VoxelIndex(x, 0, 10);
-      v.height = 2.0f;
-      v.label = labels[x];
-      voxels.push_back(v);
-      MeshVertex m;
-      m.cell = CellIndex(x, 0);
-      m.top_voxel = static_cast<std::uint32_t>(x);
-      m.sensed_height = 2.0f;
-      vertices.push_back(m);
-    }
+    for (int x = 0; x < static_cast<int>(labels.size()); ++x)
+      test::addColumn(voxels, vertices, CellIndex(x, 0), 10, 2.0f, labels[x]);
     EXPECT_TRUE(map.restore(voxels));
     EXPECT_TRUE(mesh.restore(vertices));
   }

@@ -1,5 +1,6 @@
 #include "core/camera_model.hpp"
 #include "core/crown_completion.hpp"
+#include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -52,16 +53,8 @@ struct Tree {
       for (int y = 75; y <= 125; ++y) {
         const bool trunk = (x == 0 && y == 100) || (second_trunk && x == 5 && y == 110);
         if (!trunk && std::hypot(x * 0.2, (y - 100) * 0.2) > 5.0) continue;
-        Voxel v;
-        v.height = trunk ? 3.0f : 0.0f;
-        v.index = VoxelIndex(x, y, trunk ? 15 : 0);
-        v.label = trunk ? VoxelLabel::NonGround : VoxelLabel::Ground;
-        MeshVertex m;
-        m.cell = CellIndex(x, y);
-        m.top_voxel = static_cast<std::uint32_t>(voxels.size());
-        m.sensed_height = v.height;
-        voxels.push_back(v);
-        vertices.push_back(m);
+        test::addColumn(voxels, vertices, CellIndex(x, y), trunk ? 15 : 0, trunk ? 3.0f : 0.0f,
+                        trunk ? VoxelLabel::NonGround : VoxelLabel::Ground);
       }
     }
     EXPECT_TRUE(map.restore(voxels));

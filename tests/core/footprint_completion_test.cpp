@@ -1,4 +1,5 @@
 #include "core/footprint_completion.hpp"
+#include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,16 +18,7 @@ struct Scene {
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
     auto add = [&](const CellIndex& c, float height, VoxelLabel label) {
-      Voxel v;
-      v.index = VoxelIndex(c.x(), c.y(), static_cast<int>(std::floor(height / 0.2)));
-      v.height = height;
-      v.label = label;
-      MeshVertex m;
-      m.cell = c;
-      m.top_voxel = static_cast<std::uint32_t>(voxels.size());
-      m.sensed_height = height;
-      voxels.push_back(v);
-      vertices.push_back(m);
+      test::addColumn(voxels, vertices, c, static_cast<int>(std::floor(height / 0.2)), height, label);
     };
     for (const auto& c : walls) add(c, 3.0f, VoxelLabel::NonGround);
     for (const auto& c : ground) add(c, 0.0f, VoxelLabel::Ground);
