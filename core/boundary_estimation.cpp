@@ -41,23 +41,24 @@ MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const 
   const double cell = map.voxelSize();
   MeshObjects out;
   out.of.assign(vertices.size(), -1);
-  std::vector<std::uint32_t> group;
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
-    if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
+    // the region first: it reads only the vertex, the label reads its voxel
     if (region &&
         !region->contains(Eigen::Vector2d((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)))
       continue;
+    if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
     const std::int32_t id = out.count++;
-    group.assign(1, i);
+    std::size_t q = out.members.size();
+    out.members.push_back(i);
     out.of[i] = id;
-    for (std::size_t q = 0; q < group.size(); ++q) {
-      const CellIndex c = vertices[group[q]].cell;
+    for (; q < out.members.size(); ++q) {
+      const CellIndex c = vertices[out.members[q]].cell;
       for (int dx = -1; dx <= 1; ++dx) {
         for (int dy = -1; dy <= 1; ++dy) {
           const std::int64_t j = mesh.find(c + CellIndex(dx, dy));
           if (j < 0 || out.of[j] >= 0 || !nonGround(vertices[j], map)) continue;
           out.of[j] = id;
-          group.push_back(static_cast<std::uint32_t>(j));
+          out.members.push_back(static_cast<std::uint32_t>(j));
         }
       }
     }
@@ -80,24 +81,28 @@ SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const
   ny_ = static_cast<int>(std::floor((centre.y() + reach - y0_) / size_)) + 1;
   const Eigen::AlignedBox2d grid(Eigen::Vector2d(x0_, y0_), Eigen::Vector2d(x0_ + nx_ * size_, y0_ + ny_ * size_));
   objects_ = findMeshObjects(mesh, map, &grid);
+  refreshTops(mesh);
+  // which object stands where
+  cells_.assign(static_cast<std::size_t>(nx_) * ny_, kEmpty);
+  for (std::uint32_t i : objects_.members) {
+    const double x = (vertices[i].cell.x() + 0.5) * cell, y = (vertices[i].cell.y() + 0.5) * cell;
+    if (x < x0_ || y < y0_ || x >= x0_ + nx_ * size_ || y >= y0_ + ny_ * size_) continue;
+    std::int32_t& c = cells_[index(x, y)];
+    c = (c == kEmpty || c == objects_.of[i]) ? objects_.of[i] : kMixed;
+  }
+}
+
+void SkylineOwners::refreshTops(const TerrainMesh& mesh) {
   // each object's known top: its highest recovered height, unknown (+inf) before any estimate
+  const auto& vertices = mesh.vertices();
   tops_.assign(objects_.count, -std::numeric_limits<double>::infinity());
-  for (std::size_t j = 0; j < vertices.size(); ++j) {
-    if (objects_.of[j] >= 0 && !vertices[j].estimates.empty()) {
+  for (std::uint32_t j : objects_.members) {
+    if (!vertices[j].estimates.empty()) {
       tops_[objects_.of[j]] = std::max(tops_[objects_.of[j]], static_cast<double>(vertices[j].recovered_height));
     }
   }
   for (double& top : tops_) {
     if (!std::isfinite(top)) top = std::numeric_limits<double>::infinity();
-  }
-  // which object stands where
-  cells_.assign(static_cast<std::size_t>(nx_) * ny_, kEmpty);
-  for (std::size_t i = 0; i < vertices.size(); ++i) {
-    if (objects_.of[i] < 0) continue;
-    const double x = (vertices[i].cell.x() + 0.5) * cell, y = (vertices[i].cell.y() + 0.5) * cell;
-    if (x < x0_ || y < y0_ || x >= x0_ + nx_ * size_ || y >= y0_ + ny_ * size_) continue;
-    std::int32_t& c = cells_[index(x, y)];
-    c = (c == kEmpty || c == objects_.of[i]) ? objects_.of[i] : kMixed;
   }
 }
 
@@ -141,7 +146,8 @@ std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary) {
 
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& k, const Pose& world_from_camera,
-                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb) {
+                                           const BoundaryEstimationConfig& cfg, const cv::Mat& rgb,
+                                           const SkylineOwners* given_owners) {
   BoundaryEstimationStats stats;
   // the object's top above a vertex: the topmost boundary pixel of its column, found once per column
   const std::vector<std::int16_t> tops_px = topBoundaryRows(boundary);
@@ -152,14 +158,16 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const int cols = static_cast<int>(tops_px.size());
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
-  std::optional<SkylineOwners> owners;
-  if (cfg.clear_line) owners.emplace(mesh, map, centre.head<2>(), cfg.max_distance);
+  if (vertices.empty() || !centre.allFinite() || !(cfg.max_distance >= 0)) return stats;
+  std::optional<SkylineOwners> own_owners;
+  const SkylineOwners* owners = cfg.clear_line ? given_owners : nullptr;
+  if (cfg.clear_line && !owners) owners = &own_owners.emplace(mesh, map, centre.head<2>(), cfg.max_distance);
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
     MeshVertex& m = vertices[i];
-    if (!nonGround(m, map)) continue;
+    // the distance first: it reads only the vertex, the label reads its voxel
     const double x = (m.cell.x() + 0.5) * cell, y = (m.cell.y() + 0.5) * cell;
     const Point3 world(x, y, m.sensed_height);
-    if ((world - centre).head<2>().norm() > cfg.max_distance) continue;
+    if ((world - centre).head<2>().norm() > cfg.max_distance || !nonGround(m, map)) continue;
     const auto px = project(k, camera_from_world * world);
     if (!px) continue;
     ++stats.projected;
@@ -175,12 +183,10 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
-    if (owners) {
-      if (owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0,
-                              1.0)) {
-        ++stats.not_clear;
-        continue;
-      }
+    if (owners &&
+        owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0, 1.0)) {
+      ++stats.not_clear;
+      continue;
     }
     mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
     ++stats.estimated;

@@ -63,8 +63,9 @@ bool looksLikeSky(const cv::Vec3b& rgb, int blue_margin, int min_brightness);
 // objects with a vertex whose cell centre lies in it, whole (also where they reach beyond it),
 // numbered in the order of their lowest vertex id in the region.
 struct MeshObjects {
-  std::vector<std::int32_t> of;  // per vertex: its object, -1 for a ground vertex or one left out
-  std::int32_t count = 0;        // objects
+  std::vector<std::int32_t> of;        // per vertex: its object, -1 for a ground vertex or one left out
+  std::int32_t count = 0;              // objects
+  std::vector<std::uint32_t> members;  // the vertices of the objects found (of >= 0), in no set order
 };
 MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d* region = nullptr);
 
@@ -78,6 +79,9 @@ class SkylineOwners {
   SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::Vector2d& centre, double reach,
                 double grid_size = 1.0);
   const MeshObjects& objects() const { return objects_; }
+  // Takes each object's known top again from the mesh's recovered heights (after estimates were
+  // added); the objects and the grid stay as they are.
+  void refreshTops(const TerrainMesh& mesh);
   // Could the pixel whose ray (origin o, direction dir, world frame), followed up to `range` metres
   // horizontally, belong to an object other than `own`? It could where the ray, outside the disc
   // (centre, radius [m]), passes over a grid cell of another object (or of several) whose top is not
@@ -107,10 +111,13 @@ struct BoundaryEstimationStats {
 };
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.
-// rgb: the camera image (CV_8UC3, RGB) for the sky test; may be empty (no test).
+// rgb: the camera image (CV_8UC3, RGB) for the sky test; may be empty (no test). owners: for the
+// clear-line test, made for this mesh around the camera with a reach of at least max_distance (a
+// caller that needs them too builds them once); nullptr: built here.
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
-                                           const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat());
+                                           const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat(),
+                                           const SkylineOwners* owners = nullptr);
 
 // Spreads recovered heights over the rest of each object (config.spread_distance): a breadth-first
 // walk from every estimated non-ground vertex through 4-neighbouring non-ground vertices; each

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace terrain {
 
@@ -28,12 +29,11 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
     double top = -1e300;
   };
   std::vector<Extent> extents(objects.count);
-  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
-    const std::int32_t o = objects.of[i];
-    if (o < 0) continue;
-    Extent& e = extents[o];
+  for (std::uint32_t i : objects.members) {
+    Extent& e = extents[objects.of[i]];
     const CellIndex c = vertices[i].cell;
     if (e.n == 0) e.first = i, e.x0 = e.x1 = c.x(), e.y0 = e.y1 = c.y();
+    e.first = std::min(e.first, i);
     e.x0 = std::min(e.x0, c.x()), e.x1 = std::max(e.x1, c.x()), e.y0 = std::min(e.y0, c.y()),
     e.y1 = std::max(e.y1, c.y());
     e.sum += Eigen::Vector2d((c.x() + 0.5) * cell, (c.y() + 0.5) * cell);
@@ -51,15 +51,21 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
 
 }  // namespace
 
+double CrownSampler::ownersReach(const CrownConfig& config, const BoundaryEstimationConfig& estimation) {
+  return estimation.max_distance + config.max_radius;
+}
+
 int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& k,
                           const Pose& world_from_camera, const CrownConfig& cfg,
-                          const BoundaryEstimationConfig& sky_cfg) {
+                          const BoundaryEstimationConfig& sky_cfg, const SkylineOwners* given_owners) {
   if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty()) return 0;
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
   // the objects within max_distance and a crown's radius of the camera (a square around it): the
   // trunks measured, and what their clear lines may cross
-  const SkylineOwners owners(mesh, map, centre.head<2>(), sky_cfg.max_distance + cfg.max_radius);
+  std::optional<SkylineOwners> own_owners;
+  const SkylineOwners& owners =
+      given_owners ? *given_owners : own_owners.emplace(mesh, map, centre.head<2>(), ownersReach(cfg, sky_cfg));
   const MeshObjects& objects = owners.objects();
   auto sky = [&](int u, int row) {
     return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);

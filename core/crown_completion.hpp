@@ -50,9 +50,15 @@ class CrownSampler {
   // One frame: rgb (CV_8UC3, RGB), the camera pose at the image time. Sky is judged with the sky
   // test of boundary estimation (its sky_blue_margin and sky_min_brightness); with its clear_line on,
   // a crown top that another sensed object may own (SkylineOwners, up to its max_distance) gives no
-  // sample. Returns the number of crowns measured.
+  // sample. owners: the mesh's objects around the camera with a reach of at least ownersReach(),
+  // their tops up to date (SkylineOwners::refreshTops after this frame's estimates); nullptr: built
+  // here. Returns the number of crowns measured.
   int measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& intrinsics,
-              const Pose& world_from_camera, const CrownConfig& config, const BoundaryEstimationConfig& estimation);
+              const Pose& world_from_camera, const CrownConfig& config, const BoundaryEstimationConfig& estimation,
+              const SkylineOwners* owners = nullptr);
+  // [m] the reach of the SkylineOwners that measure() uses: a trunk within max_distance and the far
+  // side of its crown
+  static double ownersReach(const CrownConfig& config, const BoundaryEstimationConfig& estimation);
 
   // At the end of the run: raises the ground vertices under each trunk with min_samples samples
   // (MeshVertex::spread, as spreadEstimates does). Returns the number of vertices raised.
@@ -63,8 +69,8 @@ class CrownSampler {
 
  private:
   struct Sample {
-    float top = 0;     // [m] crown top height
-    float radius = 0;  // [m]
+    float top = 0;           // [m] crown top height
+    float radius = 0;        // [m]
     Eigen::Vector2f camera;  // [m] where the camera was (x, y)
   };
   std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <unistd.h>
@@ -200,12 +201,22 @@ void Pipeline::processReady(const SensorFrame& frame) {
     last_boundary_frame_ = frame.index;
     rec.boundary_ms = msSince(t);
     t = Clock::now();
-    const BoundaryEstimationStats stats = estimateBoundaries(mesh_, map_, last_boundaries_.cleaned, calibration_.camera,
-                                                             world_from_camera, config_.estimation, frame.image->rgb);
+    // the objects around the camera, found once for both the clear-line test and the crowns
+    std::optional<SkylineOwners> owners;
+    if (config_.estimation.clear_line || config_.crown.enabled) {
+      owners.emplace(mesh_, map_, world_from_camera.translation().head<2>(),
+                     config_.crown.enabled ? CrownSampler::ownersReach(config_.crown, config_.estimation)
+                                           : config_.estimation.max_distance);
+    }
+    const SkylineOwners* shared = owners ? &*owners : nullptr;
+    const BoundaryEstimationStats stats =
+        estimateBoundaries(mesh_, map_, last_boundaries_.cleaned, calibration_.camera, world_from_camera,
+                           config_.estimation, frame.image->rgb, shared);
     rec.estimated_vertices = stats.estimated;
     if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
+    if (owners) owners->refreshTops(mesh_);
     crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, config_.crown,
-                    config_.estimation);
+                    config_.estimation, shared);
     rec.estimation_ms = msSince(t);
   }
   rec.total_ms = msSince(start);

@@ -5,31 +5,49 @@
 
 namespace terrain {
 
-std::pair<CellIndex, CellIndex> TerrainMesh::cellBounds() const {
-  CellIndex lo = vertices_.front().cell, hi = lo;
-  for (const auto& v : vertices_) {
-    lo = lo.cwiseMin(v.cell);
-    hi = hi.cwiseMax(v.cell);
+std::pair<CellIndex, CellIndex> TerrainMesh::cellBounds() const { return {lo_, hi_}; }
+
+std::uint32_t* TerrainMesh::slot(const CellIndex& cell, bool create) {
+  const int bx = blockOf(cell.x()), by = blockOf(cell.y());
+  auto it = block_index_.find(key(bx, by));
+  if (it == block_index_.end()) {
+    if (!create) return nullptr;
+    it = block_index_.emplace(key(bx, by), static_cast<std::uint32_t>(blocks_.size())).first;
+    blocks_.emplace_back().fill(kNoVertex);
   }
-  return {lo, hi};
+  return &blocks_[it->second][(cell.y() - by * kBlock) * kBlock + (cell.x() - bx * kBlock)];
+}
+
+const std::uint32_t* TerrainMesh::slot(const CellIndex& cell) const {
+  const int bx = blockOf(cell.x()), by = blockOf(cell.y());
+  const auto it = block_index_.find(key(bx, by));
+  if (it == block_index_.end()) return nullptr;
+  return &blocks_[it->second][(cell.y() - by * kBlock) * kBlock + (cell.x() - bx * kBlock)];
 }
 
 bool TerrainMesh::restore(std::vector<MeshVertex> vertices) {
   vertices_ = std::move(vertices);
-  index_.clear();
+  block_index_.clear();
+  blocks_.clear();
   for (std::uint32_t id = 0; id < vertices_.size(); ++id) {
-    if (!index_.try_emplace(key(vertices_[id].cell), id).second) {
+    std::uint32_t* s = slot(vertices_[id].cell, true);
+    if (*s != kNoVertex) {
       vertices_.clear();
-      index_.clear();
+      block_index_.clear();
+      blocks_.clear();
       return false;
     }
+    *s = id;
+    const CellIndex c = vertices_[id].cell;
+    lo_ = id == 0 ? c : lo_.cwiseMin(c);
+    hi_ = id == 0 ? c : hi_.cwiseMax(c);
   }
   return true;
 }
 
 std::int64_t TerrainMesh::find(const CellIndex& cell) const {
-  auto it = index_.find(key(cell));
-  return it == index_.end() ? std::int64_t{-1} : static_cast<std::int64_t>(it->second);
+  const std::uint32_t* s = slot(cell);
+  return s == nullptr || *s == kNoVertex ? std::int64_t{-1} : static_cast<std::int64_t>(*s);
 }
 
 void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& voxel_ids) {
@@ -37,8 +55,11 @@ void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& 
   for (std::uint32_t id : voxel_ids) {
     const Voxel& v = voxels[id];
     const CellIndex cell(v.index.x(), v.index.y());
-    auto [it, inserted] = index_.try_emplace(key(cell), static_cast<std::uint32_t>(vertices_.size()));
-    if (inserted) {
+    std::uint32_t* s = slot(cell, true);
+    if (*s == kNoVertex) {
+      *s = static_cast<std::uint32_t>(vertices_.size());
+      lo_ = vertices_.empty() ? cell : lo_.cwiseMin(cell);
+      hi_ = vertices_.empty() ? cell : hi_.cwiseMax(cell);
       MeshVertex m;
       m.cell = cell;
       m.top_voxel = id;
@@ -46,7 +67,7 @@ void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& 
       vertices_.push_back(m);
       continue;
     }
-    MeshVertex& m = vertices_[it->second];
+    MeshVertex& m = vertices_[*s];
     const Voxel& top = voxels[m.top_voxel];
     if (id == m.top_voxel || v.index.z() > top.index.z()) {
       m.top_voxel = id;

@@ -15,14 +15,14 @@ namespace terrain {
 
 struct MeshVertex {
   CellIndex cell;
-  std::uint32_t top_voxel = 0;  // voxel id of the column's top
-  float sensed_height = 0;      // [m] height of the top voxel
-  std::vector<float> estimates; // [m] recovered-height estimates from the frames that saw the top
-  float recovered_height = 0;   // [m] fused estimate (median), valid when !estimates.empty()
-  bool spread = false;          // without estimates of its own: recovered_height comes from the
-                                // nearest estimated vertex of the same object (spreadEstimates),
-                                // its completed footprint's roof (roofWalls) or a tree crown over it
-                                // (CrownSampler::apply)
+  std::uint32_t top_voxel = 0;   // voxel id of the column's top
+  float sensed_height = 0;       // [m] height of the top voxel
+  std::vector<float> estimates;  // [m] recovered-height estimates from the frames that saw the top
+  float recovered_height = 0;    // [m] fused estimate (median), valid when !estimates.empty()
+  bool spread = false;           // without estimates of its own: recovered_height comes from the
+                                 // nearest estimated vertex of the same object (spreadEstimates),
+                                 // its completed footprint's roof (roofWalls) or a tree crown over it
+                                 // (CrownSampler::apply)
 
   // raised by boundary estimation, from its own estimates or its object's
   bool raised() const { return !estimates.empty() || spread; }
@@ -84,11 +84,23 @@ class TerrainMesh {
   void addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates, double quantile = 0.5);
 
  private:
-  static std::uint64_t key(const CellIndex& c) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
+  // The vertices are indexed by blocks of kBlock x kBlock cells, each a dense array of vertex ids:
+  // a lookup hashes the block (a few thousand keys, not one per vertex).
+  static constexpr int kBlock = 32;
+  static constexpr std::uint32_t kNoVertex = ~std::uint32_t{0};
+  using Block = std::array<std::uint32_t, kBlock * kBlock>;
+  static int blockOf(int c) { return c >= 0 ? c / kBlock : -((-c + kBlock - 1) / kBlock); }
+  static std::uint64_t key(int bx, int by) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx)) << 32) | static_cast<std::uint32_t>(by);
   }
+  // the slot of a cell's vertex id, creating its block if asked; nullptr where there is no block
+  std::uint32_t* slot(const CellIndex& cell, bool create);
+  const std::uint32_t* slot(const CellIndex& cell) const;
+
   std::vector<MeshVertex> vertices_;
-  std::unordered_map<std::uint64_t, std::uint32_t> index_;
+  std::unordered_map<std::uint64_t, std::uint32_t> block_index_;  // block key -> index into blocks_
+  std::vector<Block> blocks_;
+  CellIndex lo_ = CellIndex::Zero(), hi_ = CellIndex::Zero();  // cellBounds(), kept up to date
 };
 
 }  // namespace terrain

@@ -334,6 +334,15 @@ void BM_LongRunMemory(benchmark::State& state) {
     state.counters["standing_growth_mb"] = (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[from].resident_bytes)) / 1e6;
     state.counters["standing_new_voxels"] = static_cast<double>(r.back().voxels - r[from].voxels);
     state.counters["voxels"] = static_cast<double>(r.back().voxels);
+    // boundary estimation and crown samples per frame, early and late in the run (the map grows)
+    auto median_estimation = [&](std::size_t a, std::size_t b) {
+      std::vector<double> t;
+      for (std::size_t i = a; i < b; ++i) t.push_back(r[i].estimation_ms);
+      std::sort(t.begin(), t.end());
+      return t[t.size() / 2];
+    };
+    state.counters["estimation_first100_ms"] = median_estimation(0, 100);
+    state.counters["estimation_last100_ms"] = median_estimation(r.size() - 100, r.size());
   }
 }
 BENCHMARK(BM_LongRunMemory)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(1);
@@ -410,6 +419,8 @@ int main(int argc, char** argv) {
     std::printf("%-44s %11.2f MB %15s %12s\n", ("1000 frames: growth over the last 300, " +
                 std::to_string(static_cast<long>(r->counters.at("standing_new_voxels"))) + " new voxels").c_str(),
                 static_cast<double>(r->counters.at("standing_growth_mb")), "only with voxels", "");
+    std::printf("%-44s %5.1f / %4.1f ms %16s %12s\n", "1000 frames: estimation, first / last 100",
+                static_cast<double>(r->counters.at("estimation_first100_ms")), static_cast<double>(r->counters.at("estimation_last100_ms")), "", "");
   }
   if (const auto* r = get("BM_KittiScanSegmentation")) std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation", ms(*r), "<= 10 ms", "");
   return 0;

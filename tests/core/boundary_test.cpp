@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+
 namespace terrain {
 namespace {
 
@@ -227,6 +229,74 @@ TEST(BoundaryEstimationTest, SkylineOwnersKnowOnlyTheObjectsWithinReachButThemWh
   EXPECT_FALSE(owners.otherMayOwn(eye, Vector3(-1, 0, 0.01), 10.0, -1, Eigen::Vector2d(-5, 0), 0.5, 1.0));
   // the whole mesh within reach: B is found too
   EXPECT_EQ(SkylineOwners(mesh, map, Eigen::Vector2d(0, 0), 40.0).objects().count, 2);
+  // the members are A's 101 vertices
+  std::vector<std::uint32_t> members = owners.objects().members;
+  std::sort(members.begin(), members.end());
+  ASSERT_EQ(members.size(), 101u);
+  for (std::uint32_t i = 0; i < members.size(); ++i) EXPECT_EQ(members[i], i);
+}
+
+// Objects are numbered by their lowest vertex id in the region, whatever order they are found in.
+TEST(BoundaryEstimationTest, MeshObjectsAreNumberedByTheirLowestVertexInTheRegion) {
+  const auto N = VoxelLabel::NonGround, G = VoxelLabel::Ground;
+  // ids 0..6 along x: objects {0, 1}, {3}, {5, 6}; saved in reverse, ids 6..0
+  std::vector<Voxel> voxels;
+  std::vector<MeshVertex> vertices;
+  const std::vector<VoxelLabel> labels{N, N, G, N, G, N, N};
+  for (int x = 6; x >= 0; --x) test::addColumn(voxels, vertices, CellIndex(x, 0), 10, 2.0f, labels[x]);
+  VoxelMap map{VoxelMapConfig{}};
+  TerrainMesh mesh;
+  ASSERT_TRUE(map.restore(voxels));
+  ASSERT_TRUE(mesh.restore(vertices));
+  const MeshObjects all = findMeshObjects(mesh, map);
+  ASSERT_EQ(all.count, 3);
+  // vertex id 0 is cell 6: the object {5, 6} first, then {3} (id 3), then {0, 1} (ids 5, 6)
+  EXPECT_EQ(all.of, (std::vector<std::int32_t>{0, 0, -1, 1, -1, 2, 2}));
+  EXPECT_EQ(all.members.size(), 5u);
+  // cells 1..3 only (x in [0.2, 0.8] m): {0, 1} whole, and {3}; the region's lowest ids are 3 and 5
+  const Eigen::AlignedBox2d region(Eigen::Vector2d(0.2, -1.0), Eigen::Vector2d(0.8, 1.0));
+  const MeshObjects part = findMeshObjects(mesh, map, &region);
+  ASSERT_EQ(part.count, 2);
+  EXPECT_EQ(part.of, (std::vector<std::int32_t>{-1, -1, -1, 0, -1, 1, 1}));
+}
+
+// The owners' known tops follow estimates added after they were made once refreshTops is called,
+// and a frame estimated with owners made beforehand matches one that makes its own.
+TEST(BoundaryEstimationTest, SharedOwnersGiveWhatOwnOwnersGive) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  const Pose world_from_camera = northCamera();
+  const auto top_px = project(k, world_from_camera.inverse() * Vector3(3.1, 20.1, 12.0));
+  ASSERT_TRUE(top_px.has_value());
+  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
+  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  // the wall A at (3, 20) and B on the same line of sight at (6.25, 40.25), B's top unknown
+  VoxelMap map(VoxelMapConfig{0.2});
+  map.insert({Point3(3.05, 20.05, 1.05), Point3(6.25, 40.25, 1.05)}, 0);
+  for (auto& v : map.voxels()) v.label = VoxelLabel::NonGround;
+  TerrainMesh mesh;
+  mesh.update(map, map.takeNewVoxels());
+  const std::uint32_t a = mesh.vertices()[0].cell.y() < 150 ? 0 : 1, b = 1 - a;
+  const BoundaryEstimationConfig cfg;
+  SkylineOwners owners(mesh, map, world_from_camera.translation().head<2>(), cfg.max_distance);
+  TerrainMesh own = mesh;
+  const auto shared_stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, cv::Mat(), &owners);
+  const auto own_stats = estimateBoundaries(own, map, boundary, k, world_from_camera, cfg);
+  // neither top is clear: each object's top is unknown and lies on the other's line of sight
+  EXPECT_EQ(shared_stats.not_clear, 2);
+  EXPECT_EQ(own_stats.not_clear, shared_stats.not_clear);
+  EXPECT_EQ(own_stats.estimated, shared_stats.estimated);
+  // B turns out 15 m high, below the ray (22.4 m where it passes B): stale owners still say B may
+  // own A's top, refreshed ones do not
+  mesh.addEstimate(b, 15.0f, 15);
+  const Point3 eye = world_from_camera.translation();
+  const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(top_px->x(), top_px->y()));
+  const std::int32_t a_object = owners.objects().of[a];
+  EXPECT_TRUE(owners.otherMayOwn(eye, dir, cfg.max_distance, a_object, Eigen::Vector2d(3.1, 20.1), 1.0, 1.0));
+  owners.refreshTops(mesh);
+  EXPECT_FALSE(owners.otherMayOwn(eye, dir, cfg.max_distance, a_object, Eigen::Vector2d(3.1, 20.1), 1.0, 1.0));
+  // A now gets its estimate (B, behind A whose top is still unknown, does not)
+  EXPECT_EQ(estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, cv::Mat(), &owners).estimated, 1);
+  EXPECT_EQ(mesh.vertices()[a].estimates.size(), 1u);
 }
 
 TEST(BoundaryEstimationTest, EstimatesSpreadOverTheirObjectOnlyAndOnlySoFar) {
@@ -276,6 +346,40 @@ TEST(TerrainMeshTest, TrianglesUseOnlyExistingVertices) {
   vs.push_back(vs.front());
   EXPECT_FALSE(mesh.restore(vs));
   EXPECT_TRUE(mesh.vertices().empty());
+}
+
+// Cells on both sides of zero and across the edges of the mesh's index blocks (32 cells): every
+// vertex is found at its cell whether it came from voxels or from a saved mesh, no other cell has
+// one, and the bounds are the cells' extremes.
+TEST(TerrainMeshTest, FindsEveryVertexOnBothSidesOfZeroAndAcrossBlocks) {
+  std::vector<CellIndex> cells;
+  for (int y = -70; y <= 70; y += 7) {
+    for (int x : {-65, -64, -33, -32, -31, -1, 0, 1, 31, 32, 33, 63, 64}) cells.emplace_back(x, y);
+  }
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> points;
+  for (const CellIndex& c : cells) points.emplace_back((c.x() + 0.5) * 0.2, (c.y() + 0.5) * 0.2, 1.0);
+  map.insert(points, 0);
+  TerrainMesh mesh;
+  mesh.update(map, map.takeNewVoxels());
+  ASSERT_EQ(mesh.vertices().size(), cells.size());
+  TerrainMesh saved;
+  ASSERT_TRUE(saved.restore(mesh.vertices()));
+  for (const TerrainMesh* m : {&mesh, &saved}) {
+    for (std::size_t i = 0; i < m->vertices().size(); ++i) EXPECT_EQ(m->find(m->vertices()[i].cell), std::int64_t(i));
+    for (const CellIndex& c : cells) {
+      EXPECT_EQ(m->find(c + CellIndex(0, 1)), -1) << c.transpose();  // rows are 7 cells apart
+    }
+    EXPECT_EQ(m->find(CellIndex(-2, -70)), -1);
+    EXPECT_EQ(m->find(CellIndex(1000, -1000)), -1);
+    EXPECT_EQ(m->cellBounds().first, CellIndex(-65, -70));
+    EXPECT_EQ(m->cellBounds().second, CellIndex(64, 70));
+  }
+  // a second voxel higher in a column moves that column's top, not its vertex
+  map.insert({Point3((32 + 0.5) * 0.2, (0 + 0.5) * 0.2, 3.0)}, 1);
+  mesh.update(map, map.takeNewVoxels());
+  EXPECT_EQ(mesh.vertices().size(), cells.size());
+  EXPECT_NEAR(mesh.vertices()[mesh.find(CellIndex(32, 0))].sensed_height, 3.0, 0.11);
 }
 
 }  // namespace
