@@ -83,7 +83,7 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
 
 // options that fill the pipeline settings; defaults shown in --help
 void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_file, std::string& histogram,
-                        std::string& solver) {
+                        std::string& solver, std::vector<std::string>& settings) {
   cmd.add_option("--config", config_file, "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
                                           "estimation, footprint, crown); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
@@ -110,13 +110,21 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
                "complete building footprints from two walls of a corner and roof them at the walls' recovered height "
                "(default: on)");
   cmd.add_flag("--crowns,!--no-crowns", c.crown.enabled,
-               "raise the ground under tree crowns measured against the sky above sensed trunks (default: on)");
+               "raise the ground under tree crowns measured in the images above sensed trunks (by their foliage "
+               "colour, or against the sky with --set crown.cue=sky) (default: on)");
   cmd.add_option("--spread-distance", c.estimation.spread_distance,
                  "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();
+  cmd.add_option(
+      "--set", settings,
+      "KEY=VALUE: any pipeline setting by its name in the --config file (section.field, e.g. crown.cue=sky, "
+      "ground.icm_iterations=4); repeatable; applied after --config and the options above; the settings used "
+      "are written to report.json");
 }
 
-void applyChoices(PipelineConfig& c, const std::string& histogram, const std::string& solver) {
+void applyChoices(PipelineConfig& c, const std::string& histogram, const std::string& solver,
+                  const std::vector<std::string>& settings) {
+  for (const std::string& s : settings) app::applyPipelineSetting(s, c, "--set");
   if (!parseHistogram(histogram, c.ground.histogram)) throw io::InputError("--histogram must be local or global, not '" + histogram + "'");
   if (!parseSolver(solver, c.ground.solver)) throw io::InputError("--solver must be icm or mincut, not '" + solver + "'");
   app::validate(c);
@@ -522,6 +530,7 @@ int main(int argc, char** argv) {
   PipelineConfig pipe_cfg;
   std::string pipe_config_file = !isSubcommand(argc, argv, "record") ? preScan(argc, argv, "--config") : "";
   std::string histogram = "local", solver = "icm";
+  std::vector<std::string> pipe_settings;  // --set KEY=VALUE, applied after --config
   fs::path recon_input, recon_out;
   bool recon_force = false;
   recon->add_option("--input", recon_input, "dataset directory (from 'terrain record')")->required();
@@ -584,8 +593,8 @@ int main(int argc, char** argv) {
     std::cerr << "terrain: error: " << e.what() << "\n";
     return 2;
   }
-  addPipelineOptions(*recon, pipe_cfg, pipe_config_file, histogram, solver);
-  addPipelineOptions(*run, pipe_cfg, pipe_config_file, histogram, solver);
+  addPipelineOptions(*recon, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
+  addPipelineOptions(*run, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
   run->add_option("--noise-seed", run_sim.seed, "sensor noise seed")->capture_default_str();
   run->add_option("--sim-config", sim_config_file, "YAML file with simulation settings (as for 'terrain record --config')");
   run->add_option("--speed", run_sim.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
@@ -603,7 +612,7 @@ int main(int argc, char** argv) {
   reg->add_option("--junit", reg_junit, "also write the comparison as JUnit XML");
   reg->add_option("--out", reg_out, "directory for the scenarios' outputs (default out/regress-SUITE)");
   reg->add_flag("--force", reg_force, "overwrite an existing --write-baseline file");
-  addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver);
+  addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
 
   // terrain kitti
   CLI::App* kitti = app.add_subcommand("kitti", "score ground segmentation on real KITTI HDL-64E scans with SemanticKITTI labels");
@@ -613,7 +622,7 @@ int main(int argc, char** argv) {
   kitti->add_option("--scan", kitti_scans, "KITTI .bin scan(s); labels are read from the .label file beside each")->required();
   kitti->add_option("--sensor-height", kitti_height, "lidar height above the road [m]")->capture_default_str();
   kitti->add_option("--json", kitti_json, "also write the scores as JSON");
-  addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver);
+  addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
 
   CLI11_PARSE(app, argc, argv);
   try {
@@ -641,7 +650,7 @@ int main(int argc, char** argv) {
       return stream(strm_pcap, strm_scene, strm_frames, cfg, strm_to, strm_speed);
     }
     if (recon->parsed()) {
-      applyChoices(pipe_cfg, histogram, solver);
+      applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       auto dataset = std::make_unique<rig::DatasetSource>(recon_input);
       // a dataset recorded from a scene still on disk can be scored against it
       std::shared_ptr<sim::World> world;
@@ -662,13 +671,13 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (run->parsed()) {
-      applyChoices(pipe_cfg, histogram, solver);
+      applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       if (!lidar_choice.endpoint.empty()) rig::LidarEndpoint::parse(lidar_choice.endpoint);
       runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false, &lidar_choice);
       return 0;
     }
     if (kitti->parsed()) {
-      applyChoices(pipe_cfg, histogram, solver);
+      applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       nlohmann::json all;
       std::cout << std::fixed << std::setprecision(3) << "scan          method                 F1     IoU    precision recall\n";
       for (const auto& scan_path : kitti_scans) {
@@ -688,7 +697,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (reg->parsed()) {
-      applyChoices(pipe_cfg, histogram, solver);
+      applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       const eval::Suite suite = eval::loadSuite(reg_suite);
       if (!reg_write.empty() && !reg_baseline.empty()) throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
       if (reg_write.empty() && reg_baseline.empty()) throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");

@@ -80,6 +80,13 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"footprint.min_raised", integer(c.footprint.min_raised)},
       {"footprint.min_raised_share", num(c.footprint.min_raised_share)},
       {"crown.enabled", [&c](const YAML::Node& n) { c.crown.enabled = n.as<bool>(); }},
+      {"crown.cue",
+       [&c](const YAML::Node& n) {
+         if (!parseCrownCue(n.as<std::string>(), c.crown.cue))
+           throw YAML::Exception(n.Mark(), "expected foliage or sky");
+       }},
+      {"crown.foliage_margin", integer(c.crown.foliage_margin)},
+      {"crown.max_trunk_gap", num(c.crown.max_trunk_gap)},
       {"crown.max_trunk_width", num(c.crown.max_trunk_width)},
       {"crown.min_radius", num(c.crown.min_radius)},
       {"crown.max_radius", num(c.crown.max_radius)},
@@ -138,6 +145,10 @@ void validate(const PipelineConfig& c) {
           "[0, crown.max_radius] m");
   require(c.crown.max_radius > 0 && c.crown.max_radius <= 50, "crown.max_radius", c.crown.max_radius, "(0, 50] m");
   require(c.crown.min_samples >= 1, "crown.min_samples", c.crown.min_samples, ">= 1");
+  require(c.crown.foliage_margin >= 0 && c.crown.foliage_margin <= 255, "crown.foliage_margin", c.crown.foliage_margin,
+          "[0, 255] grey levels");
+  require(c.crown.max_trunk_gap >= 0 && c.crown.max_trunk_gap <= 100, "crown.max_trunk_gap", c.crown.max_trunk_gap,
+          "[0, 100] m");
   require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
   require(c.crown.min_height_px >= 1, "crown.min_height_px", c.crown.min_height_px, ">= 1 px");
   require(c.crown.min_baseline >= 0, "crown.min_baseline", c.crown.min_baseline, ">= 0 m");
@@ -150,6 +161,10 @@ void validate(const PipelineConfig& c) {
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
   io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown");
+}
+
+void applyPipelineSetting(const std::string& key_value, PipelineConfig& c, const std::string& option) {
+  io::applySetting(key_value, fields(c), option);
 }
 
 std::string pipelineConfigToJson(const PipelineConfig& c) {
@@ -180,7 +195,9 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                     {"wall_tolerance", c.footprint.wall_tolerance}, {"min_wall_share", c.footprint.min_wall_share},
                     {"min_side_support", c.footprint.min_side_support}, {"max_inside_share", c.footprint.max_inside_share},
                     {"min_raised", c.footprint.min_raised}, {"min_raised_share", c.footprint.min_raised_share}};
-  j["crown"] = {{"enabled", c.crown.enabled}, {"max_trunk_width", c.crown.max_trunk_width},
+  j["crown"] = {{"enabled", c.crown.enabled}, {"cue", c.crown.cue == CrownConfig::Cue::Foliage ? "foliage" : "sky"},
+                {"foliage_margin", c.crown.foliage_margin}, {"max_trunk_gap", c.crown.max_trunk_gap},
+                {"max_trunk_width", c.crown.max_trunk_width},
                 {"min_radius", c.crown.min_radius}, {"max_radius", c.crown.max_radius},
                 {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
                 {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline},

@@ -13,6 +13,11 @@ namespace terrain::app {
 // and key for unknown keys, bad values and values out of range.
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& config);
 
+// Overlays one "key=value" setting (the YAML name, e.g. crown.cue=sky) given with the command-line
+// option `option`. Throws io::InputError naming the option and the setting for an unknown key or a bad
+// value; ranges are checked by validate().
+void applyPipelineSetting(const std::string& key_value, PipelineConfig& config, const std::string& option);
+
 // Throws io::InputError naming the first field outside its range.
 void validate(const PipelineConfig& config);
 

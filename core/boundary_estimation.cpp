@@ -113,7 +113,8 @@ std::size_t SkylineOwners::index(double x, double y) const {
 }
 
 bool SkylineOwners::otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own,
-                                const Eigen::Vector2d& centre, double radius, double margin) const {
+                                const Eigen::Vector2d& centre, double radius, double margin,
+                                const std::vector<char>* candidates) const {
   if (cells_.empty()) return false;
   const double h = dir.head<2>().norm();
   if (h < 1e-12) return false;
@@ -124,7 +125,7 @@ bool SkylineOwners::otherMayOwn(const Point3& o, const Vector3& dir, double rang
     if ((p - centre).squaredNorm() <= radius * radius) continue;
     if (p.x() < x0_ || p.y() < y0_ || p.x() >= x0_ + nx_ * size_ || p.y() >= y0_ + ny_ * size_) continue;
     const std::int32_t c = cells_[index(p.x(), p.y())];
-    if (c == kEmpty || c == own) continue;
+    if (c == kEmpty || c == own || (candidates && c >= 0 && !(*candidates)[c])) continue;
     if (c == kMixed || !(tops_[c] < o.z() + t * dir.z() - margin)) return true;
   }
   return false;

@@ -86,8 +86,10 @@ class SkylineOwners {
   // horizontally, belong to an object other than `own`? It could where the ray, outside the disc
   // (centre, radius [m]), passes over a grid cell of another object (or of several) whose top is not
   // at least `margin` [m] below the ray there. Beyond the gridded square the ray passes nothing.
+  // candidates: per object, whether it could own such a pixel at all (nullptr: every object); a
+  // grid cell shared by several objects counts as one that could.
   bool otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
-                   double radius, double margin) const;
+                   double radius, double margin, const std::vector<char>* candidates = nullptr) const;
 
  private:
   static constexpr std::int32_t kEmpty = -1, kMixed = -2;

@@ -51,6 +51,17 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
 
 }  // namespace
 
+bool parseCrownCue(const std::string& s, CrownConfig::Cue& out) {
+  if (s == "foliage") return out = CrownConfig::Cue::Foliage, true;
+  if (s == "sky") return out = CrownConfig::Cue::Sky, true;
+  return false;
+}
+
+bool looksLikeFoliage(const cv::Vec3b& c, int margin) {
+  const int r = c[0], g = c[1], b = c[2];
+  return g >= r + margin && g >= b + margin;
+}
+
 double CrownSampler::ownersReach(const CrownConfig& config, const BoundaryEstimationConfig& estimation) {
   return estimation.max_distance + config.max_radius;
 }
@@ -70,6 +81,10 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   auto sky = [&](int u, int row) {
     return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);
   };
+  const bool foliage_cue = cfg.cue == CrownConfig::Cue::Foliage;
+  auto crown = [&](int u, int row) {
+    return foliage_cue ? looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin) : !sky(u, row);
+  };
   // where every trunk's top appears in the image (u < 0: not in the image)
   struct View {
     int u = -1, v = -1;
@@ -77,6 +92,10 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   };
   const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, cfg.max_trunk_width);
   std::vector<View> views(trunks.size());
+  // with the foliage cue, only another tree can own a crown's pixel: a building behind or before the
+  // crown is not foliage
+  std::vector<char> trunk_like(objects.count, 0);
+  for (const Trunk& t : trunks) trunk_like[t.object] = 1;
   for (std::size_t i = 0; i < trunks.size(); ++i) {
     const Point3 p = camera_from_world * Point3(trunks[i].centre.x(), trunks[i].centre.y(), trunks[i].top);
     const auto px = project(k, p);
@@ -88,19 +107,29 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     const Trunk& t = trunks[i];
     const int u = views[i].u, v = views[i].v;
     if (u < 0) continue;
-    // up the column while not sky: the crown's top is the last non-sky row
-    int top = v;
-    while (top - 1 >= 0 && !sky(u, top - 1)) --top;
-    if (top == 0 || v - top < cfg.min_height_px) continue;  // cut off by the image top, or nothing above
-    // the non-sky runs around the column, row by row down from the top, while sky bounds them on both
-    // sides and neither end jumps outwards (something behind joining the crown): the widest, and
+    // the crown's rows in the trunk's column: [top, bottom]
+    int top = v, bottom = v - 1;
+    if (foliage_cue) {
+      // up the bare trunk (neither foliage nor sky) to the crown's lowest pixel, then up the crown
+      const int gap = static_cast<int>(std::ceil(cfg.max_trunk_gap * k.fy / views[i].depth));
+      int row = v;
+      while (row >= 0 && v - row <= gap && !crown(u, row) && !sky(u, row)) --row;
+      if (row < 0 || v - row > gap || !crown(u, row)) continue;  // no crown above the bare trunk
+      bottom = row;
+      top = row;
+    }
+    while (top - 1 >= 0 && crown(u, top - 1)) --top;
+    // cut off by the image top, or too little crown
+    if (top == 0 || bottom - top + 1 < cfg.min_height_px) continue;
+    // the crown's runs around the column, row by row down from the top, while the cue bounds them on
+    // both sides and neither end jumps outwards (something behind joining the crown): the widest, and
     // the crown's half width as the largest distance from the column to the nearer end of a run (a
     // crown beside it, joined on one side, does not widen it)
     int widest = 0, prev_left = u, prev_right = u, widest_left = u, half = 0;
-    for (int row = top; row < v; ++row) {
+    for (int row = top; row <= bottom; ++row) {
       int left = u, right = u;
-      while (left - 1 >= 0 && !sky(left - 1, row)) --left;
-      while (right + 1 < rgb.cols && !sky(right + 1, row)) ++right;
+      while (left - 1 >= 0 && crown(left - 1, row)) --left;
+      while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
       if (left == 0 || right == rgb.cols - 1) break;
       const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
       if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
@@ -128,7 +157,9 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) continue;
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
     const double reach = std::max(sky_cfg.max_distance, (t.centre - centre.head<2>()).norm() + cfg.max_radius);
-    if (sky_cfg.clear_line && owners.otherMayOwn(centre, dir, reach, t.object, t.centre, 1.0, 1.0)) continue;
+    if (sky_cfg.clear_line &&
+        owners.otherMayOwn(centre, dir, reach, t.object, t.centre, 1.0, 1.0, foliage_cue ? &trunk_like : nullptr))
+      continue;
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
     ++measured;
   }

@@ -38,6 +38,21 @@ void applySettings(const std::filesystem::path& path, const std::map<std::string
   }
 }
 
+void applySetting(const std::string& key_value, const std::map<std::string, Setter>& setters,
+                  const std::string& option) {
+  const auto eq = key_value.find('=');
+  const std::string where = option + " " + key_value;
+  if (eq == std::string::npos || eq == 0) throw InputError(where + ": expected KEY=VALUE");
+  const std::string key = key_value.substr(0, eq);
+  const auto it = setters.find(key);
+  if (it == setters.end()) throw InputError(where + ": unknown setting '" + key + "'");
+  try {
+    it->second(YAML::Load(key_value.substr(eq + 1)));
+  } catch (const YAML::Exception& e) {
+    throw InputError(where + ": '" + key + "' has a bad value (" + e.msg + ")");
+  }
+}
+
 void requireInRange(bool ok, const std::string& field, double value, const std::string& range) {
   if (!ok) {
     std::ostringstream s;

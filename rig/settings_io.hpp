@@ -19,6 +19,11 @@ using Setter = std::function<void(const YAML::Node&)>;
 void applySettings(const std::filesystem::path& path, const std::map<std::string, Setter>& setters,
                    const std::string& sections);
 
+// Applies one "key=value" setting given on the command line (the value read as YAML, as in a file).
+// Throws InputError naming `option` and the setting for a missing '=', an unknown key or a bad value.
+void applySetting(const std::string& key_value, const std::map<std::string, Setter>& setters,
+                  const std::string& option);
+
 // Throws InputError "<field> = <value> is out of range (allowed: <range>)" unless ok.
 void requireInRange(bool ok, const std::string& field, double value, const std::string& range);
 

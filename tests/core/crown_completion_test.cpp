@@ -1,5 +1,5 @@
-#include "core/camera_model.hpp"
 #include "core/crown_completion.hpp"
+#include "core/camera_model.hpp"
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -29,14 +29,17 @@ struct Tree {
   CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   Pose pose = northCamera();
   bool second = false;
-  // building_behind: a wall the lidar saw 10 m behind the tree (y = 30 m), its top unknown;
-  // second_trunk: another trunk the lidar saw 1 m east of this one and 2 m behind it, rising into
-  // the crown in the image, its own crown not shown
-  explicit Tree(bool building_behind = false, bool second_trunk = false) : second(second_trunk) {
+  // behind: an object the lidar saw 10 m behind the tree (y = 30 m), its top unknown: a wall 8 m
+  // wide (Behind::Wall) or another trunk (Behind::Trunk, one cell); second_trunk: another trunk the
+  // lidar saw 1 m east of this one and 2 m behind it, rising into the crown in the image, its own
+  // crown not shown
+  enum class Behind { Nothing, Wall, Trunk };
+  explicit Tree(Behind behind = Behind::Nothing, bool second_trunk = false) : second(second_trunk) {
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
-    if (building_behind) {
-      for (int x = -20; x <= 20; ++x) {
+    if (behind != Behind::Nothing) {
+      const int half = behind == Behind::Wall ? 20 : 0;
+      for (int x = -half; x <= half; ++x) {
         Voxel v;
         v.height = 3.0f;
         v.index = VoxelIndex(x, 150, 15);
@@ -60,10 +63,22 @@ struct Tree {
     EXPECT_TRUE(map.restore(voxels));
     EXPECT_TRUE(mesh.restore(vertices));
   }
+  const MeshVertex& at(int x, int y) const { return mesh.vertices()[mesh.find(CellIndex(x, y))]; }
+  // the ground raised to the crown's cap: its top is 11 m and its radius 3 m, to within a pixel at
+  // 20 m (about 0.05 m) and the rasterised silhouette
+  void expectCap() const {
+    EXPECT_NEAR(at(1, 100).height(), 11.0, 0.15);
+    // 2 m from the trunk: 11 - 3 + sqrt(9 - 4)
+    EXPECT_NEAR(at(10, 100).height(), 8.0 + std::sqrt(5.0), 0.2);
+    // beyond 3.2 m the ground stays ground
+    EXPECT_FALSE(at(17, 100).raised());
+    EXPECT_FALSE(at(0, 117).raised());
+  }
   // sky above, ground below the horizon, the trunk and the crown's silhouette (a disc of the
-  // sphere's angular radius); crown_shift moves the crown up in the image [px]
-  cv::Mat image(int crown_shift = 0) const {
-    cv::Mat rgb(k.height, k.width, CV_8UC3, cv::Scalar(120, 170, 235));
+  // sphere's angular radius); crown_shift moves the crown up in the image [px]; facade: a grey facade
+  // fills the image above the horizon behind the tree instead of the sky
+  cv::Mat image(int crown_shift = 0, bool facade = false) const {
+    cv::Mat rgb(k.height, k.width, CV_8UC3, facade ? cv::Scalar(190, 180, 160) : cv::Scalar(120, 170, 235));
     const Pose camera_from_world = pose.inverse();
     const int horizon = static_cast<int>(k.cy);
     cv::rectangle(rgb, cv::Rect(0, horizon, k.width, k.height - horizon), cv::Scalar(90, 110, 60), cv::FILLED);
@@ -71,14 +86,18 @@ struct Tree {
     const auto centre = project(k, camera_from_world * Point3(0.1, 20.1, 8.0));
     const double radius_px = k.fx * std::asin(3.0 / 20.0);
     cv::rectangle(rgb, cv::Point(static_cast<int>(base->x()) - 2, static_cast<int>(centre->y()) - crown_shift),
-                  cv::Point(static_cast<int>(base->x()) + 2, static_cast<int>(base->y())), cv::Scalar(90, 60, 30), cv::FILLED);
+                  cv::Point(static_cast<int>(base->x()) + 2, static_cast<int>(base->y())), cv::Scalar(90, 60, 30),
+                  cv::FILLED);
     if (second) {
       const auto behind = project(k, camera_from_world * Point3(1.1, 22.1, 0.0));
       cv::rectangle(rgb, cv::Point(static_cast<int>(behind->x()) - 2, static_cast<int>(centre->y())),
-                    cv::Point(static_cast<int>(behind->x()) + 2, static_cast<int>(behind->y())), cv::Scalar(90, 60, 30), cv::FILLED);
+                    cv::Point(static_cast<int>(behind->x()) + 2, static_cast<int>(behind->y())), cv::Scalar(90, 60, 30),
+                    cv::FILLED);
     }
-    cv::circle(rgb, cv::Point(static_cast<int>(std::lround(centre->x())), static_cast<int>(std::lround(centre->y())) - crown_shift),
-               static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
+    cv::circle(
+        rgb,
+        cv::Point(static_cast<int>(std::lround(centre->x())), static_cast<int>(std::lround(centre->y())) - crown_shift),
+        static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
     return rgb;
   }
 };
@@ -92,9 +111,7 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   // off: nothing measured
   CrownConfig off;
   off.enabled = false;
-  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, off,
-                            BoundaryEstimationConfig{}),
-            0);
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, off, BoundaryEstimationConfig{}), 0);
   for (int frame = 0; frame < 3; ++frame) {
     EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
   }
@@ -104,18 +121,9 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   // (the same image stands for views along a baseline here)
   cfg.min_baseline = 0;
   EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
-  // the crown's top is 11 m and its radius 3 m, to within a pixel at 20 m (about 0.05 m) and the
-  // rasterised silhouette
-  const auto& v = tree.mesh.vertices();
-  auto at = [&](int x, int y) -> const MeshVertex& { return v[tree.mesh.find(CellIndex(x, y))]; };
-  EXPECT_NEAR(at(1, 100).height(), 11.0, 0.15);
-  // 2 m from the trunk: 11 - 3 + sqrt(9 - 4)
-  EXPECT_NEAR(at(10, 100).height(), 8.0 + std::sqrt(5.0), 0.2);
-  // beyond 3.2 m the ground stays ground
-  EXPECT_FALSE(at(17, 100).raised());
-  EXPECT_FALSE(at(0, 117).raised());
+  tree.expectCap();
   // the trunk, without an estimate of its own, is under the crown too
-  EXPECT_NEAR(at(0, 100).height(), 11.0, 0.15);
+  EXPECT_NEAR(tree.at(0, 100).height(), 11.0, 0.15);
 }
 
 TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOff) {
@@ -124,16 +132,25 @@ TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOf
   CrownConfig cfg;
   cfg.enabled = true;
   cfg.min_baseline = 0;
-  // a sensed wall behind the tree, of unknown height, may own the crown's top
-  Tree behind(true);
-  EXPECT_EQ(sampler.measure(behind.mesh, behind.map, behind.image(), behind.k, behind.pose, cfg, BoundaryEstimationConfig{}), 0);
   BoundaryEstimationConfig no_clear_line;
   no_clear_line.clear_line = false;
-  EXPECT_EQ(sampler.measure(behind.mesh, behind.map, behind.image(), behind.k, behind.pose, cfg, no_clear_line), 1);
+  // against the sky: a sensed wall behind the tree, of unknown height, may own the topmost non-sky
+  // pixel
+  CrownConfig sky = cfg;
+  sky.cue = CrownConfig::Cue::Sky;
+  Tree wall(Tree::Behind::Wall);
+  EXPECT_EQ(sampler.measure(wall.mesh, wall.map, wall.image(), wall.k, wall.pose, sky, BoundaryEstimationConfig{}), 0);
+  EXPECT_EQ(sampler.measure(wall.mesh, wall.map, wall.image(), wall.k, wall.pose, sky, no_clear_line), 1);
+  // by its foliage: a wall is no crown, but another trunk behind, its crown unknown, may own the top
+  EXPECT_EQ(sampler.measure(wall.mesh, wall.map, wall.image(), wall.k, wall.pose, cfg, BoundaryEstimationConfig{}), 1);
+  Tree trunk(Tree::Behind::Trunk);
+  EXPECT_EQ(sampler.measure(trunk.mesh, trunk.map, trunk.image(), trunk.k, trunk.pose, cfg, BoundaryEstimationConfig{}),
+            0);
+  // without the test each of the two trunks in the column takes the crown for its own
+  EXPECT_EQ(sampler.measure(trunk.mesh, trunk.map, trunk.image(), trunk.k, trunk.pose, cfg, no_clear_line), 2);
   sampler = CrownSampler();
   // the crown runs off the image top: its top is unknown
-  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(400), tree.k, tree.pose, cfg,
-                            BoundaryEstimationConfig{}),
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(400), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}),
             0);
   EXPECT_EQ(sampler.trunks(), 0u);
   // too few samples: nothing raised
@@ -142,28 +159,68 @@ TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOf
   EXPECT_EQ(once.apply(tree.mesh, tree.map, cfg), 0);
 }
 
+TEST(CrownCompletionTest, FoliageIsGreenAboveRedAndBlue) {
+  EXPECT_TRUE(looksLikeFoliage(cv::Vec3b(20, 58, 18), 10));      // leaves in the simulated scenes, lit
+  EXPECT_TRUE(looksLikeFoliage(cv::Vec3b(46, 84, 31), 10));      // their lighter marks
+  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(46, 84, 76), 10));     // green only 8 above blue
+  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(115, 158, 224), 10));  // sky
+  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(199, 189, 168), 10));  // a light facade
+  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(92, 66, 43), 10));     // bark
+  CrownConfig::Cue cue = CrownConfig::Cue::Sky;
+  EXPECT_TRUE(parseCrownCue("foliage", cue));
+  EXPECT_EQ(cue, CrownConfig::Cue::Foliage);
+  EXPECT_TRUE(parseCrownCue("sky", cue));
+  EXPECT_EQ(cue, CrownConfig::Cue::Sky);
+  EXPECT_FALSE(parseCrownCue("leaves", cue));
+}
+
+TEST(CrownCompletionTest, ACrownBeforeAFacadeIsMeasuredByItsFoliageNotAgainstTheSky) {
+  Tree tree;
+  const cv::Mat rgb = tree.image(0, true);
+  CrownConfig cfg;
+  cfg.enabled = true;
+  cfg.min_baseline = 0;
+  // no sky around the crown: the sky cue measures nothing
+  CrownConfig sky = cfg;
+  sky.cue = CrownConfig::Cue::Sky;
+  CrownSampler by_sky;
+  EXPECT_EQ(by_sky.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, sky, BoundaryEstimationConfig{}), 0);
+  // the foliage cue follows the bare trunk up to the crown and measures it as against the sky
+  CrownSampler sampler;
+  for (int frame = 0; frame < 3; ++frame) {
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+  }
+  EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  tree.expectCap();
+  // a bare trunk longer than max_trunk_gap below the crown: no crown found above the trunk (2 m of
+  // bare trunk between the lidar's 3 m and the crown's 5 m)
+  CrownConfig short_gap = cfg;
+  short_gap.max_trunk_gap = 1.0;
+  CrownSampler gap;
+  EXPECT_EQ(gap.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, short_gap, BoundaryEstimationConfig{}), 0);
+}
+
 TEST(CrownCompletionTest, OfTwoTrunksUnderOneCrownOnlyTheOneNearestItsCentreTakesTheSample) {
   // the crown of the first tree stands over both trunks in the image: the second trunk's column lies
   // inside it, 14 px from its centre (the crown is 47 px wide each way), so its walk up ends at the
   // same crown top and the crown's widest row is centred near enough over it
-  Tree tree(false, true);
+  Tree tree(Tree::Behind::Nothing, true);
   CrownConfig cfg;
   cfg.enabled = true;
   cfg.min_baseline = 0;
   CrownSampler sampler;
   for (int frame = 0; frame < 3; ++frame) {
-    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}),
+              1);
   }
   EXPECT_EQ(sampler.trunks(), 1u);
   EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
-  const auto& v = tree.mesh.vertices();
-  auto at = [&](int x, int y) -> const MeshVertex& { return v[tree.mesh.find(CellIndex(x, y))]; };
-  EXPECT_NEAR(at(1, 100).height(), 11.0, 0.15);
+  EXPECT_NEAR(tree.at(1, 100).height(), 11.0, 0.15);
   // around the second trunk only the first crown's cap: at 2 m east, 2 m north of the first trunk
   // 11 - 3 + sqrt(9 - 8)
-  EXPECT_NEAR(at(10, 110).height(), 9.0, 0.25);
+  EXPECT_NEAR(tree.at(10, 110).height(), 9.0, 0.25);
   // no cap of its own: 2.2 m north of it (4.3 m from the first trunk) the ground stays ground
-  EXPECT_FALSE(at(5, 121).raised());
+  EXPECT_FALSE(tree.at(5, 121).raised());
 }
 
 }  // namespace

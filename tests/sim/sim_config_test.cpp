@@ -1,6 +1,7 @@
 #include "sim/sim_config.hpp"
 
 #include "rig/file_io.hpp"
+#include "rig/settings_io.hpp"
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -30,6 +31,30 @@ TEST(SimConfigTest, YamlFillsTheNamedFields) {
   EXPECT_EQ(c.lidar.height_cap, 3.0);
   EXPECT_EQ(c.camera.position, Eigen::Vector3d(0.1, 0, 1.5));
   EXPECT_EQ(c.lidar.range_noise, 0.02);  // untouched fields keep their defaults
+}
+
+TEST(SimConfigTest, OneCommandLineSettingIsReadAsYaml) {
+  double speed = 2.0;
+  int seed = 1;
+  const std::map<std::string, io::Setter> setters = {{"robot.speed", io::numberSetter(speed)},
+                                                     {"seed", io::integerSetter(seed)}};
+  io::applySetting("robot.speed=0.75", setters, "--set");
+  io::applySetting("seed=9", setters, "--set");
+  EXPECT_EQ(speed, 0.75);
+  EXPECT_EQ(seed, 9);
+  auto error = [&](const std::string& kv) {
+    try {
+      io::applySetting(kv, setters, "--set");
+    } catch (const io::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("robot.sped=1"), "--set robot.sped=1: unknown setting 'robot.sped'");
+  EXPECT_NE(error("robot.speed=fast").find("--set robot.speed=fast: 'robot.speed' has a bad value"), std::string::npos);
+  EXPECT_NE(error("robot.speed").find("expected KEY=VALUE"), std::string::npos);
+  EXPECT_NE(error("=1").find("expected KEY=VALUE"), std::string::npos);
+  EXPECT_EQ(speed, 0.75);  // a refused setting changes nothing
 }
 
 TEST(SimConfigTest, BadFilesAreNamedWithTheLineAndField) {
