@@ -29,6 +29,16 @@ bool nonGround(const MeshVertex& m, const VoxelMap& map) {
   return map.voxels()[m.top_voxel].label == VoxelLabel::NonGround;
 }
 
+// The cells whose centres may lie in a box [m], one cell generous on every side.
+std::pair<CellIndex, CellIndex> cellsCovering(const Eigen::AlignedBox2d& box, double cell) {
+  const auto index = [cell](double v, double shift) {
+    const double i = std::floor(v / cell - 0.5) + shift;
+    return static_cast<int>(std::clamp(i, -2.0e9, 2.0e9));
+  };
+  return {CellIndex(index(box.min().x(), 0), index(box.min().y(), 0)),
+          CellIndex(index(box.max().x(), 1), index(box.max().y(), 1))};
+}
+
 }  // namespace
 
 bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
@@ -41,12 +51,22 @@ MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const 
   const double cell = map.voxelSize();
   MeshObjects out;
   out.of.assign(vertices.size(), -1);
-  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
-    // the region first: it reads only the vertex, the label reads its voxel
-    if (region &&
-        !region->contains(Eigen::Vector2d((vertices[i].cell.x() + 0.5) * cell, (vertices[i].cell.y() + 0.5) * cell)))
-      continue;
-    if (out.of[i] >= 0 || !nonGround(vertices[i], map)) continue;
+  // the non-ground vertices an object may start from, in id order: the whole mesh's, or the region's
+  // (the cell test first: it reads only the vertex, the label reads its voxel)
+  std::vector<std::uint32_t> seeds;
+  if (region) {
+    const auto [lo, hi] = cellsCovering(*region, cell);
+    mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
+      if (region->contains(Eigen::Vector2d((c.x() + 0.5) * cell, (c.y() + 0.5) * cell)) && nonGround(vertices[i], map))
+        seeds.push_back(i);
+    });
+  } else {
+    for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+      if (nonGround(vertices[i], map)) seeds.push_back(i);
+    }
+  }
+  for (std::uint32_t i : seeds) {
+    if (out.of[i] >= 0) continue;
     const std::int32_t id = out.count++;
     std::size_t q = out.members.size();
     out.members.push_back(i);
@@ -68,17 +88,26 @@ MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const 
 
 SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::Vector2d& centre, double reach,
                              double grid_size)
+    : SkylineOwners(mesh, map,
+                    Eigen::AlignedBox2d(centre - Eigen::Vector2d(reach, reach), centre + Eigen::Vector2d(reach, reach)),
+                    grid_size) {}
+
+SkylineOwners::SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d& area,
+                             double grid_size)
     : size_(grid_size) {
   const auto& vertices = mesh.vertices();
-  if (vertices.empty() || !(reach >= 0) || !std::isfinite(reach) || !centre.allFinite() || !(grid_size > 0)) return;
-  // the cells that cover the square, aligned with the mesh's lowest corner
+  // at most 100 km across: a larger area is a caller's mistake, not a grid to allocate
+  if (vertices.empty() || area.isEmpty() || !area.min().allFinite() || !area.max().allFinite() ||
+      !(area.sizes().maxCoeff() <= 1e5) || !(grid_size > 0))
+    return;
+  // the grid cells that cover the area, aligned with the mesh's lowest corner
   const double cell = map.voxelSize();
   const CellIndex lo = mesh.cellBounds().first;
   const double ox = lo.x() * cell, oy = lo.y() * cell;
-  x0_ = ox + std::floor((centre.x() - reach - ox) / size_) * size_;
-  y0_ = oy + std::floor((centre.y() - reach - oy) / size_) * size_;
-  nx_ = static_cast<int>(std::floor((centre.x() + reach - x0_) / size_)) + 1;
-  ny_ = static_cast<int>(std::floor((centre.y() + reach - y0_) / size_)) + 1;
+  x0_ = ox + std::floor((area.min().x() - ox) / size_) * size_;
+  y0_ = oy + std::floor((area.min().y() - oy) / size_) * size_;
+  nx_ = static_cast<int>(std::floor((area.max().x() - x0_) / size_)) + 1;
+  ny_ = static_cast<int>(std::floor((area.max().y() - y0_) / size_)) + 1;
   const Eigen::AlignedBox2d grid(Eigen::Vector2d(x0_, y0_), Eigen::Vector2d(x0_ + nx_ * size_, y0_ + ny_ * size_));
   objects_ = findMeshObjects(mesh, map, &grid);
   refreshTops(mesh);
@@ -162,36 +191,40 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   if (vertices.empty() || !centre.allFinite() || !(cfg.max_distance >= 0)) return stats;
   std::optional<SkylineOwners> own_owners;
   const SkylineOwners* owners = cfg.clear_line ? given_owners : nullptr;
-  if (cfg.clear_line && !owners) owners = &own_owners.emplace(mesh, map, centre.head<2>(), cfg.max_distance);
-  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+  // only the vertices in view can be estimated: the cells of the image's sector up to max_distance
+  const Eigen::AlignedBox2d view = viewRegion(k, world_from_camera, cfg.max_distance);
+  if (cfg.clear_line && !owners) owners = &own_owners.emplace(mesh, map, view);
+  const auto [lo, hi] = cellsCovering(view, cell);
+  mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
+    // the distance first: it reads only the cell, the label reads the vertex's voxel
+    const double x = (c.x() + 0.5) * cell, y = (c.y() + 0.5) * cell;
+    if (Eigen::Vector2d(x - centre.x(), y - centre.y()).norm() > cfg.max_distance) return;
     MeshVertex& m = vertices[i];
-    // the distance first: it reads only the vertex, the label reads its voxel
-    const double x = (m.cell.x() + 0.5) * cell, y = (m.cell.y() + 0.5) * cell;
+    if (!nonGround(m, map)) return;
     const Point3 world(x, y, m.sensed_height);
-    if ((world - centre).head<2>().norm() > cfg.max_distance || !nonGround(m, map)) continue;
     const auto px = project(k, camera_from_world * world);
-    if (!px) continue;
+    if (!px) return;
     ++stats.projected;
     // the object's top: the topmost boundary pixel in the column above the vertex
     const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
-    if (u >= cols) continue;
+    if (u >= cols) return;
     const int top = tops_px[u];
-    if (top < 0 || top > v || top <= cfg.top_margin) continue;
+    if (top < 0 || top > v || top <= cfg.top_margin) return;
     if (sky_test && top < rgb.rows && !skyAbove(rgb, u, top, cfg)) {
       ++stats.no_sky;
-      continue;
+      return;
     }
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
-    if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) continue;
+    if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) return;
     if (owners &&
         owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0, 1.0)) {
       ++stats.not_clear;
-      continue;
+      return;
     }
     mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
     ++stats.estimated;
-  }
+  });
   return stats;
 }
 

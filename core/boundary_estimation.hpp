@@ -69,13 +69,17 @@ struct MeshObjects {
 };
 MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d* region = nullptr);
 
-// Which sensed object may own a skyline pixel (clear_line): the objects of the mesh within reach of
-// the camera on a grid of grid_size [m] cells, with each object's known top (its highest
-// recovered height; unknown, +inf, before any estimate). Only the square of half-width reach [m]
-// around centre is gridded (cells aligned with the mesh's lowest corner), and only the objects with
-// a vertex in it are found: the cost follows the camera's reach, not the map's size.
+// Which sensed object may own a skyline pixel (clear_line): the objects of the mesh in an area around
+// the camera on a grid of grid_size [m] cells, with each object's known top (its highest recovered
+// height; unknown, +inf, before any estimate). Only the area is gridded (cells aligned with the
+// mesh's lowest corner; an area over 100 km across grids nothing), and only the objects with a
+// vertex in it are found: apart from one pass over the vertices' cells, the cost follows the area,
+// not the map's size. The area a frame needs is the camera's view up to the rays' reach:
+// viewRegion(intrinsics, pose, reach).
 class SkylineOwners {
  public:
+  SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d& area, double grid_size = 1.0);
+  // the square of half-width reach [m] around centre
   SkylineOwners(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::Vector2d& centre, double reach,
                 double grid_size = 1.0);
   const MeshObjects& objects() const { return objects_; }
@@ -85,7 +89,7 @@ class SkylineOwners {
   // Could the pixel whose ray (origin o, direction dir, world frame), followed up to `range` metres
   // horizontally, belong to an object other than `own`? It could where the ray, outside the disc
   // (centre, radius [m]), passes over a grid cell of another object (or of several) whose top is not
-  // at least `margin` [m] below the ray there. Beyond the gridded square the ray passes nothing.
+  // at least `margin` [m] below the ray there. Beyond the gridded area the ray passes nothing.
   // candidates: per object, whether it could own such a pixel at all (nullptr: every object); a
   // grid cell shared by several objects counts as one that could.
   bool otherMayOwn(const Point3& o, const Vector3& dir, double range, std::int32_t own, const Eigen::Vector2d& centre,
@@ -114,8 +118,9 @@ struct BoundaryEstimationStats {
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.
 // rgb: the camera image (CV_8UC3, RGB) for the sky test; may be empty (no test). owners: for the
-// clear-line test, made for this mesh around the camera with a reach of at least max_distance (a
-// caller that needs them too builds them once); nullptr: built here.
+// clear-line test, made for this mesh over at least viewRegion(intrinsics, world_from_camera,
+// max_distance) (a caller that needs them too builds them once); nullptr: built here. Only the
+// vertices in that view region are looked at further than their cell.
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat(),

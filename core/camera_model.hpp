@@ -3,7 +3,11 @@
 
 #include "core/sensor_data.hpp"
 
+#include <Eigen/Geometry>
+
+#include <cmath>
 #include <optional>
+#include <utility>
 
 namespace terrain {
 
@@ -30,6 +34,49 @@ inline double heightAbove(const Point3& centre, const Vector3& dir, double x, do
   const double lambda = ((x - centre.x()) * dir.x() + (y - centre.y()) * dir.y()) / h2;
   if (!(lambda > 0)) return std::numeric_limits<double>::quiet_NaN();
   return centre.z() + lambda * dir.z();
+}
+
+// The horizontal area (world x, y [m]) of every point within `reach` metres horizontally of the
+// camera that projects into its image: the bounding box of the circular sector the image spans in
+// azimuth (the azimuths of a pinhole camera's view lie between those of its four corner rays), or
+// the square of half-width reach around the camera where the view takes in the vertical (looking
+// straight down or up) or half the horizon or more. Padded by `pad` [m].
+inline Eigen::AlignedBox2d viewRegion(const CameraIntrinsics& k, const Pose& world_from_camera, double reach,
+                                      double pad = 0.5) {
+  const Eigen::Vector2d c = world_from_camera.translation().head<2>();
+  const double r = reach + pad;
+  const Eigen::AlignedBox2d square(c - Eigen::Vector2d(r, r), c + Eigen::Vector2d(r, r));
+  const Pose camera_from_world = world_from_camera.inverse();
+  for (const double z : {-1.0, 1.0}) {
+    // the vertical, as a direction in the camera frame, inside the image (edges included)
+    const Vector3 d = camera_from_world.linear() * Vector3(0, 0, z);
+    if (d.z() <= 0) continue;
+    const double u = k.fx * d.x() / d.z() + k.cx, v = k.fy * d.y() / d.z() + k.cy;
+    if (u >= 0 && v >= 0 && u <= k.width && v <= k.height) return square;
+  }
+  const auto azimuth = [&](double u, double v) {
+    const Vector3 d = world_from_camera.linear() * pixelRay(k, Pixel(u, v));
+    return std::atan2(d.y(), d.x());
+  };
+  const double axis = azimuth(k.cx, k.cy);
+  double lo = 0, hi = 0;  // relative to the optical axis's azimuth
+  for (const auto& [u, v] : {std::pair<double, double>{0.0, 0.0}, {double(k.width), 0.0}, {0.0, double(k.height)},
+                             {double(k.width), double(k.height)}}) {
+    const double d = std::remainder(azimuth(u, v) - axis, 2 * M_PI);
+    lo = std::min(lo, d), hi = std::max(hi, d);
+  }
+  if (!(hi - lo < M_PI)) return square;
+  Eigen::AlignedBox2d box(c);
+  box.extend(c + r * Eigen::Vector2d(std::cos(axis + lo), std::sin(axis + lo)));
+  box.extend(c + r * Eigen::Vector2d(std::cos(axis + hi), std::sin(axis + hi)));
+  // the compass directions the sector spans reach out to its arc
+  for (int q = -4; q <= 4; ++q) {
+    const double a = q * M_PI / 2;
+    if (a >= axis + lo && a <= axis + hi) box.extend(c + r * Eigen::Vector2d(std::cos(a), std::sin(a)));
+  }
+  box.extend(c - Eigen::Vector2d(pad, pad));
+  box.extend(c + Eigen::Vector2d(pad, pad));
+  return box;
 }
 
 }  // namespace terrain

@@ -72,11 +72,11 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty()) return 0;
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
-  // the objects within max_distance and a crown's radius of the camera (a square around it): the
-  // trunks measured, and what their clear lines may cross
+  // the objects in view within max_distance and a crown's radius of the camera: the trunks measured,
+  // and what their clear lines may cross
   std::optional<SkylineOwners> own_owners;
   const SkylineOwners& owners =
-      given_owners ? *given_owners : own_owners.emplace(mesh, map, centre.head<2>(), ownersReach(cfg, sky_cfg));
+      given_owners ? *given_owners : own_owners.emplace(mesh, map, viewRegion(k, world_from_camera, ownersReach(cfg, sky_cfg)));
   const MeshObjects& objects = owners.objects();
   auto sky = [&](int u, int row) {
     return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);

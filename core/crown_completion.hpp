@@ -69,9 +69,9 @@ class CrownSampler {
   // One frame: rgb (CV_8UC3, RGB), the camera pose at the image time. Sky is judged with the sky
   // test of boundary estimation (its sky_blue_margin and sky_min_brightness); with its clear_line on,
   // a crown top that another sensed object may own (SkylineOwners, up to its max_distance) gives no
-  // sample. owners: the mesh's objects around the camera with a reach of at least ownersReach(),
-  // their tops up to date (SkylineOwners::refreshTops after this frame's estimates); nullptr: built
-  // here. Returns the number of crowns measured.
+  // sample. owners: the mesh's objects over at least viewRegion(intrinsics, world_from_camera,
+  // ownersReach()), their tops up to date (SkylineOwners::refreshTops after this frame's estimates);
+  // nullptr: built here. Returns the number of crowns measured.
   int measure(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& intrinsics,
               const Pose& world_from_camera, const CrownConfig& config, const BoundaryEstimationConfig& estimation,
               const SkylineOwners* owners = nullptr);

@@ -201,12 +201,13 @@ void Pipeline::processReady(const SensorFrame& frame) {
     last_boundary_frame_ = frame.index;
     rec.boundary_ms = msSince(t);
     t = Clock::now();
-    // the objects around the camera, found once for both the clear-line test and the crowns
+    // the objects in the camera's view, found once for both the clear-line test and the crowns
     std::optional<SkylineOwners> owners;
     if (config_.estimation.clear_line || config_.crown.enabled) {
-      owners.emplace(mesh_, map_, world_from_camera.translation().head<2>(),
-                     config_.crown.enabled ? CrownSampler::ownersReach(config_.crown, config_.estimation)
-                                           : config_.estimation.max_distance);
+      owners.emplace(mesh_, map_,
+                     viewRegion(calibration_.camera, world_from_camera,
+                                config_.crown.enabled ? CrownSampler::ownersReach(config_.crown, config_.estimation)
+                                                      : config_.estimation.max_distance));
     }
     const SkylineOwners* shared = owners ? &*owners : nullptr;
     const BoundaryEstimationStats stats =

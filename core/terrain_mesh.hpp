@@ -71,6 +71,12 @@ class TerrainMesh {
   std::pair<CellIndex, CellIndex> cellBounds() const;
   // Vertex id of a cell, or -1.
   std::int64_t find(const CellIndex& cell) const;
+  // Calls f(vertex id, cell) for every vertex whose cell lies in [lo, hi] (inclusive), in id order.
+  // A walk over the vertices' cells in id order, which reads memory in sequence: on a 1000-frame run
+  // it took the per-frame estimation 1.8 ms early and late, a walk of the area's cells through the
+  // block index 6.7 ms early (most of the mesh in view; vertices read out of order) and 2.7 ms late.
+  template <typename F>
+  void forEachInCells(const CellIndex& lo, const CellIndex& hi, F&& f) const;
   // Triangles over neighbouring cells (two per complete quad, one where a corner is missing),
   // counter-clockwise seen from above.
   std::vector<std::array<std::uint32_t, 3>> triangles() const;
@@ -102,5 +108,13 @@ class TerrainMesh {
   std::vector<Block> blocks_;
   CellIndex lo_ = CellIndex::Zero(), hi_ = CellIndex::Zero();  // cellBounds(), kept up to date
 };
+
+template <typename F>
+void TerrainMesh::forEachInCells(const CellIndex& lo, const CellIndex& hi, F&& f) const {
+  for (std::uint32_t id = 0; id < vertices_.size(); ++id) {
+    const CellIndex c = vertices_[id].cell;
+    if (c.x() >= lo.x() && c.y() >= lo.y() && c.x() <= hi.x() && c.y() <= hi.y()) f(id, c);
+  }
+}
 
 }  // namespace terrain

@@ -351,6 +351,52 @@ TEST(TerrainMeshTest, TrianglesUseOnlyExistingVertices) {
 // Cells on both sides of zero and across the edges of the mesh's index blocks (32 cells): every
 // vertex is found at its cell whether it came from voxels or from a saved mesh, no other cell has
 // one, and the bounds are the cells' extremes.
+// Every point within reach that a camera sees lies in its view region, whichever way it looks; the
+// region of a level camera is the sector its image spans, not the square around it.
+TEST(BoundaryEstimationTest, TheViewRegionHoldsEveryPointTheCameraSeesWithinReach) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  const double reach = 50.0;
+  const double half_hfov = std::atan(320.0 / k.fx);
+  for (const double yaw_deg : {0.0, 30.0, 90.0, 135.0, 200.0, 300.0}) {
+    for (const double pitch_deg : {0.0, 20.0, -30.0, -89.0}) {
+      // north camera turned by yaw about z, then pitched up about its own x axis
+      Pose pose = northCamera();
+      pose.linear() = Eigen::AngleAxisd(-yaw_deg * M_PI / 180, Vector3::UnitZ()).toRotationMatrix() * pose.linear() *
+                      Eigen::AngleAxisd(-pitch_deg * M_PI / 180, Vector3::UnitX()).toRotationMatrix();
+      pose.translation() = Vector3(3.0, -7.0, 1.6);
+      const Eigen::AlignedBox2d region = viewRegion(k, pose, reach, 0.0);
+      int seen = 0;
+      for (double x = -reach; x <= reach; x += 1.0) {
+        for (double y = -reach; y <= reach; y += 1.0) {
+          if (std::hypot(x, y) > reach) continue;
+          for (const double z : {-30.0, 0.0, 1.6, 10.0, 40.0}) {
+            const Point3 p(3.0 + x, -7.0 + y, z);
+            if (!project(k, pose.inverse() * p)) continue;
+            ++seen;
+            EXPECT_TRUE(region.contains(p.head<2>())) << yaw_deg << " " << pitch_deg << " " << p.transpose();
+          }
+        }
+      }
+      EXPECT_GT(seen, 100);
+    }
+  }
+  // level, looking north: the sector between the image's edges, reach deep
+  const Eigen::AlignedBox2d north = viewRegion(k, northCamera(), reach, 0.0);
+  EXPECT_NEAR(north.min().y(), 0.0, 1e-9);
+  EXPECT_NEAR(north.max().y(), reach, 1e-9);
+  // (a level camera's corner rays share their azimuth with the image's side edges)
+  EXPECT_NEAR(north.max().x(), reach * std::sin(half_hfov), 1e-9);
+  EXPECT_NEAR(north.min().x(), -north.max().x(), 1e-9);
+  // looking straight down the view takes in every direction: the square
+  Pose down = Pose::Identity();
+  down.linear().col(0) = Vector3(1, 0, 0);
+  down.linear().col(1) = Vector3(0, -1, 0);
+  down.linear().col(2) = Vector3(0, 0, -1);
+  const Eigen::AlignedBox2d square = viewRegion(k, down, reach, 0.0);
+  EXPECT_NEAR(square.min().x(), -reach, 1e-9);
+  EXPECT_NEAR(square.max().y(), reach, 1e-9);
+}
+
 TEST(TerrainMeshTest, FindsEveryVertexOnBothSidesOfZeroAndAcrossBlocks) {
   std::vector<CellIndex> cells;
   for (int y = -70; y <= 70; y += 7) {
@@ -374,6 +420,22 @@ TEST(TerrainMeshTest, FindsEveryVertexOnBothSidesOfZeroAndAcrossBlocks) {
     EXPECT_EQ(m->find(CellIndex(1000, -1000)), -1);
     EXPECT_EQ(m->cellBounds().first, CellIndex(-65, -70));
     EXPECT_EQ(m->cellBounds().second, CellIndex(64, 70));
+    // a box of cells, across blocks and zero, visits exactly the vertices in it, each once
+    for (const auto& [lo, hi] : {std::pair{CellIndex(-40, -30), CellIndex(33, 14)}, std::pair{CellIndex(-65, -70),
+                                                                                              CellIndex(64, 70)},
+                                 std::pair{CellIndex(-1000, 0), CellIndex(1000, 0)}, std::pair{CellIndex(5, 5), CellIndex(4, 9)}}) {
+      std::vector<std::uint32_t> visited, expected;
+      m->forEachInCells(lo, hi, [&](std::uint32_t id, const CellIndex& c) {
+        EXPECT_EQ(m->vertices()[id].cell, c);
+        visited.push_back(id);
+      });
+      for (std::uint32_t i = 0; i < m->vertices().size(); ++i) {
+        const CellIndex c = m->vertices()[i].cell;
+        if ((c.array() >= lo.array()).all() && (c.array() <= hi.array()).all()) expected.push_back(i);
+      }
+      std::sort(visited.begin(), visited.end());
+      EXPECT_EQ(visited, expected) << lo.transpose() << " .. " << hi.transpose();
+    }
   }
   // a second voxel higher in a column moves that column's top, not its vertex
   map.insert({Point3((32 + 0.5) * 0.2, (0 + 0.5) * 0.2, 3.0)}, 1);
