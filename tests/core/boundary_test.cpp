@@ -21,6 +21,18 @@ Pose northCamera() {
   return world_from_camera;
 }
 
+// a boundary image with one full row of boundary pixels: the row in which `top` (world) appears;
+// empty if the camera does not see it; px_out: where it appears
+cv::Mat boundaryRowThrough(const CameraIntrinsics& k, const Pose& world_from_camera, const Point3& top,
+                           Pixel* px_out = nullptr) {
+  const auto px = project(k, world_from_camera.inverse() * top);
+  if (!px) return cv::Mat();
+  if (px_out) *px_out = *px;
+  cv::Mat boundary(k.height, k.width, CV_8UC1, cv::Scalar(0));
+  boundary.row(static_cast<int>(px->y())).setTo(255);
+  return boundary;
+}
+
 TEST(BoundaryDetectionTest, BoxAgainstTheSkyGivesItsTopOnTheKnownRows) {
   // sky above row 100, a dark box from row 100 down in columns 60-180, and ground below row 200
   cv::Mat img(240, 320, CV_8UC3, cv::Scalar(200, 220, 255));
@@ -108,10 +120,7 @@ TEST(BoundaryEstimationTest, InverseProjectionOfAKnownTopPixelGivesTheExactHeigh
   map.voxels()[0].label = VoxelLabel::NonGround;
   TerrainMesh mesh;
   mesh.update(map, map.takeNewVoxels());
-  const Vector3 cell_centre(3.1, 20.1, 12.0);
-  const auto top_px = project(k, world_from_camera.inverse() * cell_centre);
-  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
-  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  const cv::Mat boundary = boundaryRowThrough(k, world_from_camera, Vector3(3.1, 20.1, 12.0));
   const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, BoundaryEstimationConfig{});
   EXPECT_EQ(stats.estimated, 1);
   // the pixel centre lies within half a pixel of the projected top: about 2 cm at 20 m
@@ -132,9 +141,7 @@ TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
   VoxelMap map(VoxelMapConfig{0.2});
   map.insert({Point3(3.05, 20.05, 1.05)}, 0);
   map.voxels()[0].label = VoxelLabel::NonGround;
-  const auto top_px = project(k, world_from_camera.inverse() * Vector3(3.1, 20.1, 12.0));
-  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
-  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  const cv::Mat boundary = boundaryRowThrough(k, world_from_camera, Vector3(3.1, 20.1, 12.0));
   BoundaryEstimationConfig cfg;
   cfg.require_sky_above = true;
   for (const bool sky : {true, false}) {
@@ -164,10 +171,8 @@ TEST(BoundaryEstimationTest, TopBoundaryRowIsTheTopmostBoundaryOfEachColumn) {
 TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   const Pose world_from_camera = northCamera();
-  const auto top_px = project(k, world_from_camera.inverse() * Vector3(3.1, 20.1, 12.0));
-  ASSERT_TRUE(top_px.has_value());
-  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
-  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  const cv::Mat boundary = boundaryRowThrough(k, world_from_camera, Vector3(3.1, 20.1, 12.0));
+  ASSERT_FALSE(boundary.empty());
   // where the top pixel's ray passes B (40 m away) it is 1.6 + 2 * 10.4 = 22.4 m up
   struct Case {
     bool clear_line;
@@ -265,10 +270,9 @@ TEST(BoundaryEstimationTest, MeshObjectsAreNumberedByTheirLowestVertexInTheRegio
 TEST(BoundaryEstimationTest, SharedOwnersGiveWhatOwnOwnersGive) {
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   const Pose world_from_camera = northCamera();
-  const auto top_px = project(k, world_from_camera.inverse() * Vector3(3.1, 20.1, 12.0));
-  ASSERT_TRUE(top_px.has_value());
-  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
-  boundary.row(static_cast<int>(top_px->y())).setTo(255);
+  Pixel top_px;
+  const cv::Mat boundary = boundaryRowThrough(k, world_from_camera, Vector3(3.1, 20.1, 12.0), &top_px);
+  ASSERT_FALSE(boundary.empty());
   // the wall A at (3, 20) and B on the same line of sight at (6.25, 40.25), B's top unknown
   VoxelMap map(VoxelMapConfig{0.2});
   map.insert({Point3(3.05, 20.05, 1.05), Point3(6.25, 40.25, 1.05)}, 0);
@@ -289,7 +293,7 @@ TEST(BoundaryEstimationTest, SharedOwnersGiveWhatOwnOwnersGive) {
   // own A's top, refreshed ones do not
   mesh.addEstimate(b, 15.0f, 15);
   const Point3 eye = world_from_camera.translation();
-  const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(top_px->x(), top_px->y()));
+  const Vector3 dir = world_from_camera.linear() * pixelRay(k, top_px);
   const std::int32_t a_object = owners.objects().of[a];
   EXPECT_TRUE(owners.otherMayOwn(eye, dir, cfg.max_distance, a_object, Eigen::Vector2d(3.1, 20.1), 1.0, 1.0));
   owners.refreshTops(mesh);
