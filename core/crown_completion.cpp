@@ -76,7 +76,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   // and what their clear lines may cross
   std::optional<SkylineOwners> own_owners;
   const SkylineOwners& owners =
-      given_owners ? *given_owners : own_owners.emplace(mesh, map, viewRegion(k, world_from_camera, ownersReach(cfg, sky_cfg)));
+      given_owners ? *given_owners
+                   : own_owners.emplace(mesh, map, viewRegion(k, world_from_camera, ownersReach(cfg, sky_cfg)));
   const MeshObjects& objects = owners.objects();
   auto sky = [&](int u, int row) {
     return looksLikeSky(rgb.at<cv::Vec3b>(row, u), sky_cfg.sky_blue_margin, sky_cfg.sky_min_brightness);
