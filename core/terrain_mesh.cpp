@@ -2,27 +2,26 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace terrain {
 
 std::pair<CellIndex, CellIndex> TerrainMesh::cellBounds() const { return {lo_, hi_}; }
 
 std::uint32_t* TerrainMesh::slot(const CellIndex& cell, bool create) {
+  if (const std::uint32_t* s = std::as_const(*this).slot(cell)) return const_cast<std::uint32_t*>(s);
+  if (!create) return nullptr;
   const int bx = blockOf(cell.x()), by = blockOf(cell.y());
-  auto it = block_index_.find(key(bx, by));
-  if (it == block_index_.end()) {
-    if (!create) return nullptr;
-    it = block_index_.emplace(key(bx, by), static_cast<std::uint32_t>(blocks_.size())).first;
-    blocks_.emplace_back().fill(kNoVertex);
-  }
-  return &blocks_[it->second][(cell.y() - by * kBlock) * kBlock + (cell.x() - bx * kBlock)];
+  block_index_.emplace(key(bx, by), static_cast<std::uint32_t>(blocks_.size()));
+  blocks_.emplace_back().fill(kNoVertex);
+  return &blocks_.back()[offset(cell, bx, by)];
 }
 
 const std::uint32_t* TerrainMesh::slot(const CellIndex& cell) const {
   const int bx = blockOf(cell.x()), by = blockOf(cell.y());
   const auto it = block_index_.find(key(bx, by));
   if (it == block_index_.end()) return nullptr;
-  return &blocks_[it->second][(cell.y() - by * kBlock) * kBlock + (cell.x() - bx * kBlock)];
+  return &blocks_[it->second][offset(cell, bx, by)];
 }
 
 bool TerrainMesh::restore(std::vector<MeshVertex> vertices) {

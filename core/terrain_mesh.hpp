@@ -99,6 +99,10 @@ class TerrainMesh {
   static std::uint64_t key(int bx, int by) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(bx)) << 32) | static_cast<std::uint32_t>(by);
   }
+  // a cell's place in its block (bx, by)
+  static int offset(const CellIndex& c, int bx, int by) {
+    return (c.y() - by * kBlock) * kBlock + (c.x() - bx * kBlock);
+  }
   // the slot of a cell's vertex id, creating its block if asked; nullptr where there is no block
   std::uint32_t* slot(const CellIndex& cell, bool create);
   const std::uint32_t* slot(const CellIndex& cell) const;
