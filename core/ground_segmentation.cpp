@@ -65,6 +65,26 @@ class PeakHistogram {
     }
     lane_ = lane;
   }
+  // adds, for the columns j = 0, s, 2s, ... < count of a row, the heights h[bounds[j]] ..
+  // h[bounds[j + 1] - 1] less the column's offset, offset0 + (j / s) * step: the offset moves by
+  // step from one column to the next
+  void addColumns(const float* h, const std::uint32_t* bounds, int count, int s, double offset0, double step) {
+    double shift = offset0 * inv_ + first_, below = offset0 + base_;
+    const double shift_step = step * inv_, last = bins_ - 1;
+    int lane = lane_;
+    for (int j = 0; j < count; j += s, shift += shift_step, below += step) {
+      for (std::uint32_t q = bounds[j]; q < bounds[j + 1]; ++q) {
+        double x = h[q] * inv_ - shift;
+        x = x > 0 ? x : 0;
+        x = x < last ? x : last;
+        const int b = kLanes * static_cast<int>(x) + lane;
+        ++count_[b];
+        sum_[b] += h[q] - below;
+        lane = (lane + 1) & (kLanes - 1);
+      }
+    }
+    lane_ = lane;
+  }
   std::int64_t total() const {
     std::int64_t n = 0;
     for (std::int32_t c : count_) n += c;
@@ -158,7 +178,7 @@ double gmrfEnergy(const GmrfProblem& p, const std::vector<std::uint8_t>& ground)
 namespace {
 
 // throws std::invalid_argument unless the problem's graph is a grid's: every forward link matched
-// by its backward one, and of nodes of two colours
+// by its backward one and every backward link by its forward one, and of nodes of two colours
 void checkGrid(const GmrfProblem& p, std::size_t n, tbb::task_arena& arena) {
   std::vector<std::size_t> bad(kChunks, n);
   arena.execute([&] {
@@ -168,6 +188,8 @@ void checkGrid(const GmrfProblem& p, std::size_t n, tbb::task_arena& arena) {
           const std::uint32_t u = p.next[3 * v + a];
           if (u != GmrfProblem::kNone && (u >= n || p.prev[3 * u + a] != v || (p.parity[u] & 1) == (p.parity[v] & 1)))
             bad[c] = v;
+          const std::uint32_t w = p.prev[3 * v + a];
+          if (w != GmrfProblem::kNone && (w >= n || p.next[3 * w + a] != v)) bad[c] = v;
         }
       }
     });
@@ -176,7 +198,7 @@ void checkGrid(const GmrfProblem& p, std::size_t n, tbb::task_arena& arena) {
     if (v != n)
       throw std::invalid_argument("GMRF problem: node " + std::to_string(v) +
                                   " is linked to a node that is missing, linked from another node along the same "
-                                  "axis, or of the same parity");
+                                  "axis, not linked back, or of the same parity");
   }
 }
 
@@ -394,41 +416,46 @@ Plane fitPlane(const std::vector<const Candidates*>& parts) {
 }
 
 // The plane-fit candidates of a tile of k x k columns whose first column is (cx, cy), from the
-// height of the lowest voxel of each of its columns (row-major, +inf where empty): of those the
-// lowest of every 2 x 2 block of columns, at its column's centre. A quarter of the columns fix a
-// plane as well as all of them. The whole-map and the incremental segmentation both take a tile's
-// candidates from here.
-void candidatesFromLows(const std::vector<float>& low, int k, int cx, int cy, double cell, Candidates& out) {
-  out.x.clear(), out.y.clear(), out.z.clear();
+// height of the lowest voxel of each of its columns, given by low(c) for column c (row-major,
+// +inf where empty): of those the lowest of every 2 x 2 block of columns, at its column's centre.
+// A quarter of the columns fix a plane as well as all of them.
+template <class Low>
+void candidatesFromLows(Low&& low, int k, int cx, int cy, double cell, Candidates& out) {
+  const int blocks = (k + 1) / 2;
+  const std::size_t most = static_cast<std::size_t>(blocks) * blocks + Candidates::kLanes;
+  out.x.resize(most), out.y.resize(most), out.z.resize(most);
   out.all = Moments{};
   out.ref = Point3((cx + 0.5) * cell, (cy + 0.5) * cell, 0);
+  std::size_t n = 0;
   for (int r = 0; r < k; r += 2) {
+    const int rows = std::min(2, k - r);
     for (int c = 0; c < k; c += 2) {
+      const int cols = std::min(2, k - c);
       float best = std::numeric_limits<float>::infinity();
       int br = 0, bc = 0;
-      for (int dr = 0; dr < 2 && r + dr < k; ++dr) {
-        for (int dc = 0; dc < 2 && c + dc < k; ++dc) {
-          const float l = low[static_cast<std::size_t>(r + dr) * k + c + dc];
+      for (int dr = 0; dr < rows; ++dr) {
+        for (int dc = 0; dc < cols; ++dc) {
+          const float l = low(static_cast<std::size_t>(r + dr) * k + c + dc);
           if (l < best) best = l, br = r + dr, bc = c + dc;
         }
       }
       if (!std::isfinite(best)) continue;
-      if (out.z.empty()) out.ref.z() = best;
-      out.x.push_back(static_cast<float>(bc * cell));
-      out.y.push_back(static_cast<float>(br * cell));
-      out.z.push_back(static_cast<float>(best - out.ref.z()));
+      if (n == 0) out.ref.z() = best;
+      out.x[n] = static_cast<float>(bc * cell);
+      out.y[n] = static_cast<float>(br * cell);
+      out.z[n] = static_cast<float>(best - out.ref.z());
+      ++n;
     }
   }
-  out.count = out.x.size();
-  for (std::size_t i = 0; i < out.count; ++i) {
+  out.count = n;
+  for (std::size_t i = 0; i < n; ++i) {
     const double px = out.x[i], py = out.y[i], pz = out.z[i];
     auto& m = out.all;
     m.n += 1, m.x += px, m.y += py, m.z += pz, m.xx += px * px, m.xy += px * py, m.yy += py * py;
     m.xz += px * pz, m.yz += py * pz, m.zmin = std::min(m.zmin, pz);
   }
-  while (out.x.size() % Candidates::kLanes != 0) {
-    out.x.push_back(0), out.y.push_back(0), out.z.push_back(std::numeric_limits<float>::max());
-  }
+  for (; n % Candidates::kLanes != 0; ++n) out.x[n] = 0, out.y[n] = 0, out.z[n] = std::numeric_limits<float>::max();
+  out.x.resize(n), out.y.resize(n), out.z.resize(n);
 }
 
 // Eqs. 19-20 for node i of a problem, a voxel of height h [m] at grid index (x, y, z), from the
@@ -538,12 +565,21 @@ class TileLayout {
     }
   }
 
-  // the heights of the lowest voxel of every column of tile t (row-major, +inf where empty)
-  void columnLows(std::size_t t, std::vector<float>& low) const {
-    low.assign(static_cast<std::size_t>(k_) * k_, std::numeric_limits<float>::infinity());
-    for (std::size_t c = 0; c < low.size(); ++c) {
-      for (auto q = column(t, c); q < column(t, c + 1); ++q) low[c] = std::min(low[c], height_[q]);
-    }
+  // calls f(ly, lx0, bounds) for every row ly of tile t that holds a column whose grid coordinates
+  // are both multiples of s; its first such column is lx0, and column lx0 + j holds positions
+  // bounds[j] .. bounds[j + 1] - 1 (all rows, with s = 1)
+  template <class F>
+  void forEachRow(std::size_t t, F&& f, int s = 1) const {
+    const std::uint32_t* col = columns_.data() + t * (k_ * k_ + 1);
+    const int lx0 = floorMod(-tiles_[t].tx * k_, s), ly0 = floorMod(-tiles_[t].ty * k_, s);
+    for (int ly = ly0; ly < k_; ly += s) f(ly, lx0, col + ly * k_ + lx0);
+  }
+
+  // the height of the lowest voxel of column c (row-major) of tile t; +inf if it is empty
+  float columnLow(std::size_t t, std::size_t c) const {
+    float low = std::numeric_limits<float>::infinity();
+    for (auto q = column(t, c); q < column(t, c + 1); ++q) low = std::min(low, height_[q]);
+    return low;
   }
 
   // Links every voxel of tiles 0 .. count - 1 to its neighbours at +x, +y, +z in those tiles, with
@@ -756,13 +792,14 @@ double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& ti
     histogram.reset(lo, hi, bin_size);
     for (std::size_t t : tiles) {
       const auto& tile = layout.tiles()[t];
-      layout.forEachColumn(
+      const int step = t == centre ? 1 : s;
+      layout.forEachRow(
           t,
-          [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
-            const double at = plane.at((tile.tx * k + lx + 0.5) * cell, (tile.ty * k + ly + 0.5) * cell);
-            histogram.add(&layout.height(b), e - b, at);
+          [&](int ly, int lx0, const std::uint32_t* bounds) {
+            const double at = plane.at((tile.tx * k + lx0 + 0.5) * cell, (tile.ty * k + ly + 0.5) * cell);
+            histogram.addColumns(&layout.height(0), bounds, k - lx0, step, at, plane.a * cell * step);
           },
-          t == centre ? 1 : s);
+          step);
     }
     if (histogram.total() >= kMinHistogram) break;
   }
@@ -789,9 +826,8 @@ void tilePlanes(Workspace& ws, std::size_t count, const GroundSegmentationConfig
   auto& candidates = ws.candidates;
   candidates.resize(tiles);
   tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-    std::vector<float> low;
-    layout.columnLows(t, low);
-    candidatesFromLows(low, k, layout.tiles()[t].tx * k, layout.tiles()[t].ty * k, cell, candidates[t]);
+    candidatesFromLows([&](std::size_t c) { return layout.columnLow(t, c); }, k, layout.tiles()[t].tx * k,
+                       layout.tiles()[t].ty * k, cell, candidates[t]);
   });
   ws.planes.resize(count);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {

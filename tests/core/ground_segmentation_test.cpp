@@ -203,6 +203,10 @@ TEST(GroundSegmentationTest, IcmRefusesAProblemThatIsNotAGrids) {
   GmrfProblem two_forward = randomProblem(10, 3);
   two_forward.next[3 * 2 + 0] = 5;  // 2 -> 5 along x, but 5's backward neighbour along x is 4
   EXPECT_THROW(solveIcm(two_forward, labels, 5, 1), std::invalid_argument);
+  GmrfProblem stale_back = randomProblem(10, 3);
+  stale_back.prev[3 * 7 + 2] = 2;  // 7 says 2 is before it along z, but 2 has no forward neighbour there
+  ASSERT_EQ(stale_back.next[3 * 2 + 2], GmrfProblem::kNone);
+  EXPECT_THROW(solveIcm(stale_back, labels, 5, 1), std::invalid_argument);
   EXPECT_EQ(labels, std::vector<std::uint8_t>(10, 0));
   EXPECT_NO_THROW(solveIcm(randomProblem(10, 3), labels, 5, 1));
 }
