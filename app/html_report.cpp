@@ -116,6 +116,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   h << "<h2>Ground segmentation</h2><table><tr><th>method</th><th>F1</th><th>IoU</th><th>precision</th><th>recall</th>"
        "<th>F1 per point</th></tr>";
   for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
+    if (!r["ground_segmentation"].contains(m)) continue;  // baselines not asked for
     const auto& g = r["ground_segmentation"][m];
     h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(g["f1"]) << "</td><td>" << fmt(g["iou"]) << "</td><td>"
       << fmt(g["precision"]) << "</td><td>" << fmt(g["recall"]) << "</td><td>" << fmt(g["per_point"]["f1"]) << "</td></tr>";

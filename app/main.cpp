@@ -134,6 +134,7 @@ void applyChoices(PipelineConfig& c, const std::string& histogram, const std::st
 void printScorecard(const nlohmann::json& r) {
   std::cout << std::fixed << std::setprecision(3) << "scorecard\n  ground segmentation per voxel    F1     IoU    precision  recall\n";
   for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
+    if (!r["ground_segmentation"].contains(m)) continue;  // baselines not asked for
     const auto& g = r["ground_segmentation"][m];
     std::cout << "    " << std::left << std::setw(28) << m << std::right << g["f1"].get<double>() << "  " << g["iou"].get<double>()
               << "  " << g["precision"].get<double>() << "      " << g["recall"].get<double>() << "\n";
@@ -157,7 +158,7 @@ void printScorecard(const nlohmann::json& r) {
     std::cout << " sensed as terrain (under crowns): " << h["object_cells_sensed_as_terrain"].get<std::size_t>() << " cells\n";
   }
   if (h.contains("by_camera_view")) {
-    std::cout << "    cells whose top the camera saw:";
+    std::cout << "    cells whose sensed top the camera saw:";
     for (const char* k : {"building_in_camera_view", "tree_in_camera_view"}) {
       if (!h["by_camera_view"].contains(k)) continue;
       const auto& e = h["by_camera_view"][k];
@@ -196,11 +197,11 @@ void printScorecard(const nlohmann::json& r) {
 
 // scores a finished pipeline against the truth (when there is a world) and writes report.json and
 // report.html into out; without a world, report.json holds what needs no truth
-nlohmann::json evaluate(const Pipeline& pipeline, const eval::RunTruth& truth, const sim::World* world, const fs::path& out,
-                        bool quiet) {
+nlohmann::json evaluate(const Pipeline& pipeline, const eval::RunTruth& truth, const sim::World* world,
+                        const fs::path& out, bool quiet, const eval::EvaluationOptions& scoring) {
   nlohmann::json report;
   if (world) {
-    report = eval::evaluateRun(pipeline, truth, *world);
+    report = eval::evaluateRun(pipeline, truth, *world, scoring);
     if (!quiet) printScorecard(report);
     io::writeFileAtomic(out / "report.html", app::htmlReport(report, pipeline, truth, *world, "terrain reconstruction report"), true);
   } else {
@@ -216,7 +217,7 @@ nlohmann::json evaluate(const Pipeline& pipeline, const eval::RunTruth& truth, c
 // sensing on its own thread, processing on this one; writes the outputs into out. With a world,
 // the ground truth the source carries is scored (it never reaches the pipeline).
 nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& config, const fs::path& out,
-                           const sim::World* world, bool quiet = false) {
+                           const sim::World* world, const eval::EvaluationOptions& scoring, bool quiet = false) {
   Pipeline pipeline(source.calibration(), config);
   eval::RunTruth truth(config.voxel_map.voxel_size);
   app::BoundedQueue<SensorFrame> queue(4);
@@ -292,7 +293,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   // what scoring needs stays beside the outputs, for 'terrain evaluate --run'
   const bool scored = world && truth.voxels.size() > 0;
   if (scored) app::writeRunState(out, pipeline, truth, world->scenePath());
-  nlohmann::json report = evaluate(pipeline, truth, scored ? world : nullptr, out, quiet);
+  nlohmann::json report = evaluate(pipeline, truth, scored ? world : nullptr, out, quiet, scoring);
   if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json"
                         << (scored ? ", report.html, state/" : "") << " into " << fs::absolute(out).string() << "\n";
   return report;
@@ -308,7 +309,8 @@ struct LidarChoice {
 
 // the pipeline over `others` with its lidar replaced by Velodyne packets
 nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, const LidarChoice& lidar_choice,
-                                    const PipelineConfig& pipe_cfg, const fs::path& out, const sim::World* world) {
+                                    const PipelineConfig& pipe_cfg, const fs::path& out, const sim::World* world,
+                                    const eval::EvaluationOptions& scoring) {
   const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
   rig::LaserCalibration lasers =
       lidar_choice.calibration.empty() ? others->lasers() : rig::loadLaserCalibration(lidar_choice.calibration);
@@ -317,7 +319,7 @@ nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, c
     std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe() << "\n";
   }
   rig::LidarSwapSource source(std::move(others), std::move(lidar));
-  nlohmann::json report = reconstruct(source, pipe_cfg, out, world);
+  nlohmann::json report = reconstruct(source, pipe_cfg, out, world, scoring);
   std::cout << "lidar " << source.lidar().summary() << "\n";
   if (source.pointsWithoutTruth() > 0) {
     std::cout << "  " << source.pointsWithoutTruth() << " decoded points had no partner in the other source's truth (not scored)\n";
@@ -327,7 +329,7 @@ nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, c
 
 nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int frames, const sim::SimConfig& sim_cfg,
                            const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet,
-                           const LidarChoice* lidar = nullptr) {
+                           const eval::EvaluationOptions& scoring, const LidarChoice* lidar = nullptr) {
   io::prepareOutputDir(out, force);
   scenes::SceneConfig scene_cfg;
   scene_cfg.type = type;
@@ -337,10 +339,11 @@ nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int fram
   auto world = std::make_shared<sim::World>(scene_path);
   if (lidar && !lidar->endpoint.empty()) {
     // camera, GPS and gyro simulated, the lidar from packets (for example 'terrain stream --scene')
-    return reconstructWithLidar(std::make_unique<sim::SimulatedRig>(world, sim_cfg, frames), *lidar, pipe_cfg, out, world.get());
+    return reconstructWithLidar(std::make_unique<sim::SimulatedRig>(world, sim_cfg, frames), *lidar, pipe_cfg, out,
+                                world.get(), scoring);
   }
   sim::SimulatedRig rig(world, sim_cfg, frames);
-  return reconstruct(rig, pipe_cfg, out, world.get(), quiet);
+  return reconstruct(rig, pipe_cfg, out, world.get(), scoring, quiet);
 }
 
 int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool force) {
@@ -550,12 +553,21 @@ int main(int argc, char** argv) {
                    "[s] a live lidar stream ends after this long without packets")->capture_default_str();
   };
   addLidarOptions(*recon, "the dataset");
+  eval::EvaluationOptions scoring;
+  const auto addScoringOptions = [&scoring](CLI::App& cmd) {
+    cmd.add_flag("--baselines,!--no-baselines", scoring.ground_baselines,
+                 "score the ground segmentation baselines (fixed band, RANSAC plane, PCL's progressive morphological "
+                 "filter) beside the method; the filter takes about a minute on a map of millions of voxels "
+                 "(default: on)");
+  };
+  addScoringOptions(*recon);
 
   // terrain evaluate
   CLI::App* evalc = app.add_subcommand("evaluate", "score a finished run (of 'terrain run' or 'terrain reconstruct') again: report.json and report.html");
   fs::path eval_run, eval_out;
   evalc->add_option("--run", eval_run, "the run's output directory (it holds state/)")->required();
   evalc->add_option("--out", eval_out, "where to write report.json and report.html (default: the run directory, replacing its reports)");
+  addScoringOptions(*evalc);
 
   // terrain stream
   CLI::App* strm = app.add_subcommand("stream", "send a capture or a simulated run to a UDP address as HDL-64E packets at the sensor's rate");
@@ -585,6 +597,7 @@ int main(int argc, char** argv) {
   run->add_option("--out", run_out, "output directory")->capture_default_str();
   run->add_flag("--force", run_force, "write into an existing, non-empty directory");
   addLidarOptions(*run, "the simulated rig");
+  addScoringOptions(*run);
   try {
     if (!config_file.empty()) sim::loadSimConfig(config_file, sim_cfg);
     if (!pipe_config_file.empty()) app::loadPipelineConfig(pipe_config_file, pipe_cfg);
@@ -639,7 +652,7 @@ int main(int argc, char** argv) {
           if (fs::exists(out / f)) throw io::InputError((out / f).string() + ": exists (give another --out, or leave --out out to replace the run's own reports)");
         }
       }
-      evaluate(*saved.pipeline, *saved.truth, &world, out, false);
+      evaluate(*saved.pipeline, *saved.truth, &world, out, false, scoring);
       std::cout << "wrote report.json and report.html into " << fs::absolute(out).string() << "\n";
       return 0;
     }
@@ -661,19 +674,20 @@ int main(int argc, char** argv) {
       if (lidar_choice.endpoint.empty()) {
         if (!lidar_choice.calibration.empty()) throw io::InputError("--calibration applies to --lidar only");
         io::prepareOutputDir(recon_out, recon_force);
-        reconstruct(*dataset, pipe_cfg, recon_out, world.get());
+        reconstruct(*dataset, pipe_cfg, recon_out, world.get(), scoring);
         return 0;
       }
       // the real-driver path: the lidar from packets, everything else from the dataset
       rig::LidarEndpoint::parse(lidar_choice.endpoint);  // a bad endpoint is refused before anything is written
       io::prepareOutputDir(recon_out, recon_force);
-      reconstructWithLidar(std::move(dataset), lidar_choice, pipe_cfg, recon_out, world.get());
+      reconstructWithLidar(std::move(dataset), lidar_choice, pipe_cfg, recon_out, world.get(), scoring);
       return 0;
     }
     if (run->parsed()) {
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       if (!lidar_choice.endpoint.empty()) rig::LidarEndpoint::parse(lidar_choice.endpoint);
-      runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false, &lidar_choice);
+      runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false, scoring,
+                  &lidar_choice);
       return 0;
     }
     if (kitti->parsed()) {
@@ -706,7 +720,7 @@ int main(int argc, char** argv) {
       for (const auto& sc : suite.scenarios) {
         std::cerr << "regress: " << sc.id() << " ...\n";
         results[sc.id()] = eval::flattenMetrics(
-            runScenario(sc.type, sc.seed, sc.frames, run_sim, pipe_cfg, work / sc.id(), true, true));
+            runScenario(sc.type, sc.seed, sc.frames, run_sim, pipe_cfg, work / sc.id(), true, true, {}));
       }
       // every metric of every scenario, and a summary table beside the per-scenario reports
       nlohmann::json all = results;

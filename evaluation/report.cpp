@@ -130,7 +130,8 @@ json timingJson(const std::vector<FrameRecord>& records) {
   return j;
 }
 
-json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world) {
+json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world,
+                 const EvaluationOptions& options) {
   json r;
   const VoxelMap& map = pipeline.map();
   const auto& seg = pipeline.segmentation();
@@ -151,12 +152,18 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   g["gmrf_mincut"] = segmentationJson(map, by_cut.refined, truth.voxels);
   g["gmrf_mincut"]["energy"] = by_cut.energy_refined;
   g["histogram"]["energy"] = seg.energy_rough;
-  const std::vector<Point3> pts = voxelPoints(map);
-  std::vector<Point3> vehicle;
-  for (const auto& rec : pipeline.records()) vehicle.push_back(rec.position);
-  g["fixed_band"] = segmentationJson(map, groundByFixedBand(pts, vehicle, pipeline.config().ground.delta), truth.voxels);
-  g["ransac_plane"] = segmentationJson(map, groundByRansacPlane(pts, 0.2), truth.voxels);
-  g["morphological_filter"] = segmentationJson(map, groundByMorphologicalFilter(pts, MorphologicalFilterConfig{}), truth.voxels);
+  if (options.ground_baselines) {
+    const std::vector<Point3> pts = voxelPoints(map);
+    std::vector<Point3> vehicle;
+    for (const auto& rec : pipeline.records()) vehicle.push_back(rec.position);
+    g["fixed_band"] =
+        segmentationJson(map, groundByFixedBand(pts, vehicle, pipeline.config().ground.delta), truth.voxels);
+    g["ransac_plane"] = segmentationJson(map, groundByRansacPlane(pts, 0.2), truth.voxels);
+    g["morphological_filter"] =
+        segmentationJson(map, groundByMorphologicalFilter(pts, MorphologicalFilterConfig{}), truth.voxels);
+  } else {
+    g["baselines_skipped"] = "not asked for (--no-baselines)";
+  }
 
   // heights of object vertices, before and after recovery
   const HeightScores h = scoreHeights(pipeline.mesh(), map, world, truth.path);
@@ -171,7 +178,11 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
                                   {"raised_cells", h.raised_by_view.at(view)}};
   }
   for (const auto& [band, e] : h.by_band) hr["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
-  for (const auto& [id, e] : h.by_object) hr["by_object"][id] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  for (const auto& [id, e] : h.by_object) {
+    hr["by_object"][id] = {{"before", errorJson(e.first)},
+                           {"after", errorJson(e.second)},
+                           {"cells_in_camera_view", h.in_view_by_object.at(id)}};
+  }
   for (const auto& [kind, e] : h.by_kind) hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
   // roofs of completed building footprints

@@ -51,8 +51,16 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
                                   const sim::World& world, const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame,
                                   int tolerance);
 
-// The full report. Re-runs the segmentation with both solvers on the final map, runs the baselines.
-nlohmann::json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world);
+struct EvaluationOptions {
+  // score the ground segmentation baselines (fixed band, RANSAC plane, PCL's progressive
+  // morphological filter); the filter takes about a minute on a map of a few million voxels
+  bool ground_baselines = true;
+};
+
+// The full report. Re-runs the segmentation with both solvers on the final map, runs the baselines
+// (the ground ones unless options say not to: then ground_segmentation.baselines_skipped says so).
+nlohmann::json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::World& world,
+                           const EvaluationOptions& options = {});
 
 // Flattens a report into "a.b.c" -> number for the numeric leaves.
 std::map<std::string, double> flattenMetrics(const nlohmann::json& report);

@@ -89,6 +89,7 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
     if (auto it = owner.find(t.geom); it != owner.end()) {
       objects[it->second].first.push_back(eb);
       objects[it->second].second.push_back(ea);
+      out.in_view_by_object[it->second] += in_view;
     }
   }
   out.before = errorStats(before);

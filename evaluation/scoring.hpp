@@ -25,12 +25,14 @@ struct HeightScores {
   ErrorStats before, after;  // over object cells: sensed-only heights, then after recovery
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_band;    // "0-30", "30-60", "60-100" [m]
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_object;  // object id
+  std::map<std::string, std::size_t> in_view_by_object;  // object id -> its cells whose sensed top the camera saw
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_kind;    // "building", "tree" (trunk or crown on top)
   // object cells whose sensed top is the terrain under the object (ground under a tree crown):
   // their vertex is ground, so boundary estimation, which raises non-ground vertices, cannot reach them
   std::size_t sensed_as_terrain = 0;
   ErrorStats seen_before, seen_after;  // object cells that received at least one estimate
-  // object cells by whether the camera ever saw their top: "in_camera_view", "never_in_camera_view",
+  // object cells by whether the camera ever saw their sensed top (its voxel took a colour from an
+  // image; the true top above may lie outside the image): "in_camera_view", "never_in_camera_view",
   // and per kind ("building_in_camera_view", ...); the method can only raise cells it saw
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_view;
   std::map<std::string, std::size_t> raised_by_view;  // of those cells, how many were raised

@@ -5,6 +5,7 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <fstream>
@@ -40,6 +41,23 @@ TEST_F(EvaluateTest, ScoresAFinishedRunAsTheRunDid) {
   const std::string before = io::readFile(again / "report.json");
   EXPECT_NE(0, sh(kCli + " evaluate --run " + run().string() + " --out " + again.string() + " > /dev/null 2>&1"));
   EXPECT_EQ(before, io::readFile(again / "report.json"));
+}
+
+TEST_F(EvaluateTest, WithoutBaselinesTheReportSaysSoAndScoresTheMethodAsBefore) {
+  const fs::path lean = *dir_ / "lean";
+  ASSERT_EQ(0,
+            sh(kCli + " evaluate --run " + run().string() + " --out " + lean.string() + " --no-baselines > /dev/null"));
+  const auto full = nlohmann::json::parse(io::readFile(run() / "report.json"));
+  const auto r = nlohmann::json::parse(io::readFile(lean / "report.json"));
+  const auto& g = r["ground_segmentation"];
+  for (const char* m : {"fixed_band", "ransac_plane", "morphological_filter"}) {
+    EXPECT_TRUE(full["ground_segmentation"].contains(m)) << m;
+    EXPECT_FALSE(g.contains(m)) << m;
+  }
+  EXPECT_NE(g.value("baselines_skipped", "").find("--no-baselines"), std::string::npos);
+  for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut"}) EXPECT_EQ(g[m], full["ground_segmentation"][m]) << m;
+  EXPECT_EQ(r["height_recovery"], full["height_recovery"]);
+  EXPECT_TRUE(fs::exists(lean / "report.html"));
 }
 
 TEST_F(EvaluateTest, DamagedStateGetsAClearError) {
