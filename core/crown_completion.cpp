@@ -173,7 +173,8 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   auto& vertices = mesh.vertices();
   const double cell = map.voxelSize();
   int raised = 0;
-  for (const Trunk& t : findTrunks(mesh, map, objects, cfg.max_trunk_width)) {
+  // only trunks with samples count: the wider limit lets in those that have grown since
+  for (const Trunk& t : findTrunks(mesh, map, objects, std::max(cfg.max_trunk_width, cfg.max_grown_width))) {
     const auto it = samples_.find(t.key);
     if (it == samples_.end() || static_cast<int>(it->second.size()) < std::max(1, cfg.min_samples)) continue;
     // seen from far enough apart
