@@ -74,6 +74,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"footprint.enabled", [&c](const YAML::Node& n) { c.footprint.enabled = n.as<bool>(); }},
       {"footprint.min_side", num(c.footprint.min_side)},
       {"footprint.wall_tolerance", num(c.footprint.wall_tolerance)},
+      {"footprint.wall_band", num(c.footprint.wall_band)},
       {"footprint.min_wall_share", num(c.footprint.min_wall_share)},
       {"footprint.min_side_support", num(c.footprint.min_side_support)},
       {"footprint.max_inside_share", num(c.footprint.max_inside_share)},
@@ -133,6 +134,8 @@ void validate(const PipelineConfig& c) {
           c.estimation.spread_distance, "[0, 200] m");
   require(c.footprint.min_side > 0, "footprint.min_side", c.footprint.min_side, "> 0 m");
   require(c.footprint.wall_tolerance >= 0 && c.footprint.wall_tolerance <= 10, "footprint.wall_tolerance", c.footprint.wall_tolerance,
+          "[0, 10] m");
+  require(c.footprint.wall_band >= 0 && c.footprint.wall_band <= 10, "footprint.wall_band", c.footprint.wall_band,
           "[0, 10] m");
   for (const auto& [name, share] : {std::pair{"footprint.min_wall_share", c.footprint.min_wall_share},
                                     {"footprint.min_side_support", c.footprint.min_side_support},
@@ -195,7 +198,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                      {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
                      {"spread_distance", c.estimation.spread_distance}};
   j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
-                    {"wall_tolerance", c.footprint.wall_tolerance}, {"min_wall_share", c.footprint.min_wall_share},
+                    {"wall_tolerance", c.footprint.wall_tolerance}, {"wall_band", c.footprint.wall_band},
+                    {"min_wall_share", c.footprint.min_wall_share},
                     {"min_side_support", c.footprint.min_side_support}, {"max_inside_share", c.footprint.max_inside_share},
                     {"min_raised", c.footprint.min_raised}, {"min_raised_share", c.footprint.min_raised_share}};
   j["crown"] = {{"enabled", c.crown.enabled}, {"cue", c.crown.cue == CrownConfig::Cue::Foliage ? "foliage" : "sky"},

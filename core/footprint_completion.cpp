@@ -142,7 +142,8 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
     const Rectangle r = outlineRectangle(centres, cell, cfg.wall_tolerance);
     if (2 * std::min(r.a, r.b) < cfg.min_side) continue;
     // nearly all of the object's cells on the outline: walls, not a solid blob or a scatter
-    if (outlineShare(r, centres, cfg.wall_tolerance) < cfg.min_wall_share) continue;
+    const double band = std::max(cfg.wall_tolerance, std::min(cfg.wall_band, 0.5 * std::min(r.a, r.b)));
+    if (outlineShare(r, centres, band) < cfg.min_wall_share) continue;
     // walls along two adjacent sides: a corner was seen
     const auto c = r.corners();
     std::array<double, 4> support{};

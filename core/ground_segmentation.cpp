@@ -45,30 +45,18 @@ class PeakHistogram {
     count_.assign(kLanes * bins_, 0);
     sum_.assign(kLanes * bins_, 0.0);
   }
-  void add(double h) { add(&h, 1, 0.0); }
-  // adds h[i] - offset for i in [0, n)
-  template <class T>
-  void add(const T* h, std::size_t n, double offset) {
-    // the bin of h - offset is floor((h - offset) / bin_size) - first_, clamped (NaN to the first);
-    // successive heights, mostly in one bin, go to different lanes: no chain of dependent
-    // read-modify-writes on one counter
-    const double shift = offset * inv_ + first_, last = bins_ - 1, below = offset + base_;
-    int lane = lane_;
-    for (std::size_t i = 0; i < n; ++i) {
-      double x = h[i] * inv_ - shift;
-      x = x > 0 ? x : 0;
-      x = x < last ? x : last;
-      const int b = kLanes * static_cast<int>(x) + lane;
-      ++count_[b];
-      sum_[b] += h[i] - below;
-      lane = (lane + 1) & (kLanes - 1);
-    }
-    lane_ = lane;
+  void add(double h) {
+    const std::uint32_t bounds[2] = {0, 1};
+    addColumns(&h, bounds, 1, 1, 0.0, 0.0);
   }
   // adds, for the columns j = 0, s, 2s, ... < count of a row, the heights h[bounds[j]] ..
   // h[bounds[j + 1] - 1] less the column's offset, offset0 + (j / s) * step: the offset moves by
   // step from one column to the next
-  void addColumns(const float* h, const std::uint32_t* bounds, int count, int s, double offset0, double step) {
+  template <class T>
+  void addColumns(const T* h, const std::uint32_t* bounds, int count, int s, double offset0, double step) {
+    // the bin of h - offset is floor((h - offset) / bin_size) - first_, clamped (NaN to the first);
+    // successive heights, mostly in one bin, go to different lanes: no chain of dependent
+    // read-modify-writes on one counter
     double shift = offset0 * inv_ + first_, below = offset0 + base_;
     const double shift_step = step * inv_, last = bins_ - 1;
     int lane = lane_;

@@ -93,6 +93,39 @@ TEST(FootprintCompletionTest, WallsWithoutEstimatesTakeTheRoofHeight) {
   EXPECT_FALSE(v[5].spread);
 }
 
+TEST(FootprintCompletionTest, WallsThickenedByALongDriveStillGiveTheFootprint) {
+  // a building of 12 x 8 m (cells 10-69 by 10-49) whose south and west walls are 1.4 m thick (7
+  // cells): a long drive's pose noise spreads a wall's returns
+  std::vector<CellIndex> walls;
+  for (int y = 10; y < 50; ++y) {
+    for (int x = 10; x < 70; ++x) {
+      if (y < 17 || x < 17) walls.emplace_back(x, y);
+    }
+  }
+  Scene s(walls, walls.size(), groundOutside());
+  const auto footprints = completeFootprints(s.mesh, s.map, FootprintConfig{});
+  ASSERT_EQ(footprints.size(), 1u);
+  EXPECT_FLOAT_EQ(footprints[0].roof_height, 10.0f);
+  std::map<std::pair<long, long>, int> corners;
+  for (const auto& c : footprints[0].corners) ++corners[{std::lround(c.x() * 10), std::lround(c.y() * 10)}];
+  EXPECT_EQ(corners,
+            (std::map<std::pair<long, long>, int>{{{20, 20}, 1}, {{140, 20}, 1}, {{140, 100}, 1}, {{20, 100}, 1}}));
+  // with the band as narrow as the outline's tolerance, the cells 1.1 and 1.3 m in are off the walls
+  FootprintConfig narrow;
+  narrow.wall_band = narrow.wall_tolerance;
+  EXPECT_TRUE(completeFootprints(s.mesh, s.map, narrow).empty());
+}
+
+TEST(FootprintCompletionTest, TheWallBandStaysShallowInASmallRectangle) {
+  // a solid 2.4 x 3 m block: a 1.5 m band would put every cell on the outline
+  std::vector<CellIndex> block;
+  for (int y = 10; y < 25; ++y) {
+    for (int x = 10; x < 22; ++x) block.emplace_back(x, y);
+  }
+  Scene s(block, block.size(), groundOutside());
+  EXPECT_TRUE(completeFootprints(s.mesh, s.map, FootprintConfig{}).empty());
+}
+
 TEST(FootprintCompletionTest, AStraightWallAloneGivesNoFootprint) {
   Scene s(southWall(), 30, groundOutside());
   EXPECT_TRUE(completeFootprints(s.mesh, s.map, FootprintConfig{}).empty());
