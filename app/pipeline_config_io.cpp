@@ -71,6 +71,10 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
       {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
       {"estimation.spread_distance", num(c.estimation.spread_distance)},
+      {"estimation.parallax_slope", num(c.estimation.parallax_slope)},
+      {"estimation.parallax_change", num(c.estimation.parallax_change)},
+      {"estimation.parallax_min_gap", num(c.estimation.parallax_min_gap)},
+      {"estimation.parallax_max_gap", num(c.estimation.parallax_max_gap)},
       {"footprint.enabled", [&c](const YAML::Node& n) { c.footprint.enabled = n.as<bool>(); }},
       {"footprint.min_side", num(c.footprint.min_side)},
       {"footprint.wall_tolerance", num(c.footprint.wall_tolerance)},
@@ -130,6 +134,14 @@ void validate(const PipelineConfig& c) {
   }
   require(c.estimation.max_distance > 0, "estimation.max_distance", c.estimation.max_distance, "> 0 m");
   require(c.estimation.max_height > 0, "estimation.max_height", c.estimation.max_height, "> 0 m");
+  require(c.estimation.parallax_slope >= 0 && c.estimation.parallax_slope <= 10, "estimation.parallax_slope",
+          c.estimation.parallax_slope, "[0, 10] m per m");
+  require(c.estimation.parallax_change >= 0 && c.estimation.parallax_change <= 100, "estimation.parallax_change",
+          c.estimation.parallax_change, "[0, 100] m");
+  require(c.estimation.parallax_min_gap >= 0 && c.estimation.parallax_min_gap <= c.estimation.parallax_max_gap,
+          "estimation.parallax_min_gap", c.estimation.parallax_min_gap, "[0, estimation.parallax_max_gap] m");
+  require(c.estimation.parallax_max_gap >= 0 && c.estimation.parallax_max_gap <= 1e4, "estimation.parallax_max_gap",
+          c.estimation.parallax_max_gap, "[0, 10000] m");
   require(c.estimation.spread_distance >= 0 && c.estimation.spread_distance <= 200, "estimation.spread_distance",
           c.estimation.spread_distance, "[0, 200] m");
   require(c.footprint.min_side > 0, "footprint.min_side", c.footprint.min_side, "> 0 m");
@@ -196,7 +208,9 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                      {"fusion_quantile", c.estimation.fusion_quantile},
                      {"clear_line", c.estimation.clear_line}, {"require_sky_above", c.estimation.require_sky_above},
                      {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
-                     {"spread_distance", c.estimation.spread_distance}};
+                     {"spread_distance", c.estimation.spread_distance},
+                     {"parallax_slope", c.estimation.parallax_slope}, {"parallax_change", c.estimation.parallax_change},
+                     {"parallax_min_gap", c.estimation.parallax_min_gap}, {"parallax_max_gap", c.estimation.parallax_max_gap}};
   j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
                     {"wall_tolerance", c.footprint.wall_tolerance}, {"wall_band", c.footprint.wall_band},
                     {"min_wall_share", c.footprint.min_wall_share},

@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr char kMagic[] = "terrain-run-state/1\n";
+constexpr char kMagic[] = "terrain-run-state/2\n";
 
 // little-endian machine layout of plain values, appended to a byte string
 class Out {
@@ -139,7 +139,7 @@ void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::Ru
   p.put<std::uint64_t>(pipeline.mesh().vertices().size());
   for (const auto& m : pipeline.mesh().vertices()) {
     p.put<std::int32_t>(m.cell.x()), p.put<std::int32_t>(m.cell.y()), p.put(m.top_voxel);
-    p.put(m.sensed_height), p.put(m.recovered_height), p.put<std::uint8_t>(m.spread);
+    p.put(m.sensed_height), p.put(m.recovered_height), p.put<std::uint8_t>(m.spread), p.put<std::uint8_t>(m.parallax);
     p.putAll(m.estimates);
   }
   const SegmentationResult& s = pipeline.segmentation();
@@ -223,14 +223,15 @@ SavedRun readRunState(const fs::path& out) {
   In p(io::readFile(pipeline_file), pipeline_file.string());
   std::vector<Voxel> voxels(static_cast<std::size_t>(p.count("voxels", kVoxelBytes)));
   for (auto& v : voxels) v = getVoxel(p);
-  std::vector<MeshVertex> vertices(static_cast<std::size_t>(p.count("mesh vertices", 29)));
+  std::vector<MeshVertex> vertices(static_cast<std::size_t>(p.count("mesh vertices", 30)));
   for (auto& m : vertices) {
     const auto x = p.get<std::int32_t>("mesh vertex"), y = p.get<std::int32_t>("mesh vertex");
     m.cell = CellIndex(x, y);
     m.top_voxel = p.get<std::uint32_t>("mesh vertex");
     m.sensed_height = p.get<float>("mesh vertex"), m.recovered_height = p.get<float>("mesh vertex");
     m.spread = p.get<std::uint8_t>("mesh vertex") != 0;
-    m.estimates = p.getAll<float>("mesh vertex estimates");
+    m.parallax = p.get<std::uint8_t>("mesh vertex") != 0;
+    m.estimates = p.getAll<HeightEstimate>("mesh vertex estimates");
   }
   SegmentationResult s;
   s.rough = p.getAll<std::uint8_t>("rough labels");

@@ -46,6 +46,30 @@ bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
   return b >= r + blue_margin && b >= g && (r + g + b) / 3 >= min_brightness;
 }
 
+bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, double change, double min_gap,
+                   double max_gap) {
+  if (!(slope > 0) || estimates.size() < 5) return false;
+  double md = 0, mh = 0, rise = 0;
+  float lo = estimates.front().distance, hi = lo;
+  for (const auto& e : estimates) {
+    md += e.distance, mh += e.height, rise += e.height - e.camera_height;
+    lo = std::min(lo, e.distance), hi = std::max(hi, e.distance);
+  }
+  const double n = static_cast<double>(estimates.size());
+  md /= n, mh /= n, rise /= n;
+  double sdd = 0, sdh = 0;
+  for (const auto& e : estimates)
+    sdd += (e.distance - md) * (e.distance - md), sdh += (e.distance - md) * (e.height - mh);
+  if (!(sdd > 0) || !(rise > 0)) return false;
+  const double b = sdh / sdd;
+  if (!(b > slope && b * (hi - lo) > change)) return false;
+  // the gap behind the vertex that would give this slope: g / (d + g) = b d / (h - c)
+  const double e = b * md / rise;
+  if (!(e < 1)) return false;
+  const double gap = e * md / (1 - e);
+  return gap >= min_gap && gap <= max_gap;
+}
+
 MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d* region) {
   const auto& vertices = mesh.vertices();
   const double cell = map.voxelSize();
@@ -126,7 +150,7 @@ void SkylineOwners::refreshTops(const TerrainMesh& mesh) {
   const auto& vertices = mesh.vertices();
   tops_.assign(objects_.count, -std::numeric_limits<double>::infinity());
   for (std::uint32_t j : objects_.members) {
-    if (!vertices[j].estimates.empty()) {
+    if (vertices[j].estimated()) {
       tops_[objects_.of[j]] = std::max(tops_[objects_.of[j]], static_cast<double>(vertices[j].recovered_height));
     }
   }
@@ -222,7 +246,11 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
       ++stats.not_clear;
       return;
     }
-    mesh.addEstimate(i, static_cast<float>(h), cfg.max_estimates, cfg.fusion_quantile);
+    const float distance = static_cast<float>(Eigen::Vector2d(x - centre.x(), y - centre.y()).norm());
+    mesh.addEstimate(i, {static_cast<float>(h), distance, static_cast<float>(centre.z())}, cfg.max_estimates,
+                     cfg.fusion_quantile);
+    m.parallax =
+        showsParallax(m.estimates, cfg.parallax_slope, cfg.parallax_change, cfg.parallax_min_gap, cfg.parallax_max_gap);
     ++stats.estimated;
   });
   return stats;
@@ -238,7 +266,7 @@ int spreadEstimates(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstima
   std::vector<int> hops(vertices.size(), 0);
   std::vector<std::uint32_t> queue;
   for (std::uint32_t i = 0; i < vertices.size(); ++i) {
-    if (!vertices[i].estimates.empty() && nonGround(vertices[i], map)) source[i] = i, queue.push_back(i);
+    if (vertices[i].estimated() && nonGround(vertices[i], map)) source[i] = i, queue.push_back(i);
   }
   int spread = 0;
   for (std::size_t q = 0; q < queue.size(); ++q) {

@@ -201,7 +201,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
         const std::int64_t j = mesh.find(c0 + CellIndex(dx, dy));
         if (j < 0 || (objects.of[j] >= 0 && objects.of[j] != t.object)) continue;
         MeshVertex& m = vertices[j];
-        if (!m.estimates.empty()) continue;  // its own estimates stand
+        if (m.estimated()) continue;  // its own estimates stand
         const Eigen::Vector2d p((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell);
         const double d2 = (p - t.centre).squaredNorm();
         if (d2 > r * r) continue;

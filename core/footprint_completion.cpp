@@ -127,7 +127,7 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
     // the roof height: the median of the walls' own estimates
     std::vector<float> raised;
     for (std::uint32_t i : ids) {
-      if (!vertices[i].estimates.empty()) raised.push_back(vertices[i].recovered_height);
+      if (vertices[i].estimated()) raised.push_back(vertices[i].recovered_height);
     }
     if (static_cast<int>(raised.size()) < std::max(1, cfg.min_raised) ||
         static_cast<double>(raised.size()) < cfg.min_raised_share * static_cast<double>(ids.size())) {
@@ -183,7 +183,7 @@ int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprin
   auto& vertices = mesh.vertices();
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     MeshVertex& m = vertices[i];
-    if (objects.of[i] < 0 || !of_object[objects.of[i]] || !m.estimates.empty()) continue;
+    if (objects.of[i] < 0 || !of_object[objects.of[i]] || m.estimated()) continue;
     // only the object's cells on the footprint's outline: the rest are not its walls
     const Footprint& f = *of_object[objects.of[i]];
     if (!Rectangle::fromCorners(f.corners).onOutline(centreOf(m.cell, map.voxelSize()), cfg.wall_tolerance)) continue;

@@ -97,7 +97,7 @@ void Pipeline::finish() {
   dirty_ = false;
   // estimates made while a vertex was provisionally non-ground do not stand once it is ground
   for (auto& m : mesh_.vertices()) {
-    if (map_.voxels()[m.top_voxel].label == VoxelLabel::Ground) m.estimates.clear();
+    if (map_.voxels()[m.top_voxel].label == VoxelLabel::Ground) m.estimates.clear(), m.parallax = false;
   }
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();

@@ -75,11 +75,14 @@ void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& 
   }
 }
 
-void TerrainMesh::addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates, double quantile) {
+void TerrainMesh::addEstimate(std::uint32_t vertex, const HeightEstimate& estimate, std::size_t max_estimates,
+                              double quantile) {
   MeshVertex& m = vertices_[vertex];
   if (m.estimates.size() >= max_estimates) m.estimates.erase(m.estimates.begin());
-  m.estimates.push_back(height);
-  std::vector<float> sorted = m.estimates;
+  m.estimates.push_back(estimate);
+  std::vector<float> sorted;
+  sorted.reserve(m.estimates.size());
+  for (const auto& e : m.estimates) sorted.push_back(e.height);
   const auto k = static_cast<std::size_t>(std::lround(quantile * (sorted.size() - 1)));
   std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
   m.recovered_height = sorted[k];

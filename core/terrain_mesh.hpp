@@ -13,19 +13,32 @@
 
 namespace terrain {
 
+// One frame's recovered-height estimate for a vertex, with where the camera was when it was made:
+// its horizontal distance to the vertex's cell centre and its height.
+struct HeightEstimate {
+  float height = 0;         // [m]
+  float distance = 0;       // [m]
+  float camera_height = 0;  // [m]
+};
+
 struct MeshVertex {
   CellIndex cell;
-  std::uint32_t top_voxel = 0;   // voxel id of the column's top
-  float sensed_height = 0;       // [m] height of the top voxel
-  std::vector<float> estimates;  // [m] recovered-height estimates from the frames that saw the top
-  float recovered_height = 0;    // [m] fused estimate (median), valid when !estimates.empty()
-  bool spread = false;           // without estimates of its own: recovered_height comes from the
-                                 // nearest estimated vertex of the same object (spreadEstimates),
-                                 // its completed footprint's roof (roofWalls) or a tree crown over it
-                                 // (CrownSampler::apply)
+  std::uint32_t top_voxel = 0;            // voxel id of the column's top
+  float sensed_height = 0;                // [m] height of the top voxel
+  std::vector<HeightEstimate> estimates;  // from the frames that saw the top, oldest first
+  float recovered_height = 0;             // [m] fused estimate, valid when estimated() or spread
+  // the estimates change with the camera's distance: the top edge seen above the vertex lies
+  // behind it (boundary estimation's parallax test), and they do not stand
+  bool parallax = false;
+  // without estimates of its own: recovered_height comes from the nearest estimated vertex of the
+  // same object (spreadEstimates), its completed footprint's roof (roofWalls) or a tree crown over
+  // it (CrownSampler::apply)
+  bool spread = false;
 
+  // has estimates of its own that stand
+  bool estimated() const { return !estimates.empty() && !parallax; }
   // raised by boundary estimation, from its own estimates or its object's
-  bool raised() const { return !estimates.empty() || spread; }
+  bool raised() const { return estimated() || spread; }
   float height() const { return raised() ? std::max(sensed_height, recovered_height) : sensed_height; }
 };
 
@@ -86,8 +99,9 @@ class TerrainMesh {
   bool restore(std::vector<MeshVertex> vertices);
 
   // Adds a recovered-height estimate to a vertex; the fused value is the `quantile` (0.5: median)
-  // of the last max_estimates estimates.
-  void addEstimate(std::uint32_t vertex, float height, std::size_t max_estimates, double quantile = 0.5);
+  // of the heights of the last max_estimates estimates.
+  void addEstimate(std::uint32_t vertex, const HeightEstimate& estimate, std::size_t max_estimates,
+                   double quantile = 0.5);
 
  private:
   // The vertices are indexed by blocks of kBlock x kBlock cells, each a dense array of vertex ids:

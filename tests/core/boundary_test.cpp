@@ -187,12 +187,76 @@ TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
     mesh.update(map, map.takeNewVoxels());
     ASSERT_EQ(mesh.vertices().size(), 2u);
     const std::uint32_t a = mesh.vertices()[0].cell.y() < 150 ? 0 : 1, b = 1 - a;
-    if (c.b_top > 0) mesh.addEstimate(b, c.b_top, 15);
+    if (c.b_top > 0) mesh.addEstimate(b, {c.b_top, 40.0f, 1.6f}, 15);
     BoundaryEstimationConfig cfg;
     cfg.clear_line = c.clear_line;
     estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg);
     EXPECT_EQ(static_cast<int>(mesh.vertices()[a].estimates.size()), c.estimated)
         << "clear_line " << c.clear_line << ", B's top " << c.b_top;
+  }
+}
+
+// Estimates of a top edge over the vertex stay put as the camera nears; those of an edge behind it
+// (height H, gap g) fall as c + (H - c) d / (d + g). Hand-computed heights for a camera 1.6 m up.
+TEST(BoundaryEstimationTest, ParallaxTestTellsAnEdgeBehindFromTheVertexsOwn) {
+  const auto behind = [](double top, double gap, double d) {
+    return HeightEstimate{static_cast<float>(1.6 + (top - 1.6) * d / (d + gap)), static_cast<float>(d), 1.6f};
+  };
+  std::vector<HeightEstimate> own, back, near_edge, steep;
+  for (int i = 0; i < 8; ++i) {
+    const float d = 20.0f - i;
+    own.push_back({12.0f + 0.02f * (i % 2 ? 1 : -1), d, 1.6f});  // a pixel's jitter
+    back.push_back(behind(30, 20, d));                           // 15.8 m at 20 m, 12.8 m at 13 m
+    near_edge.push_back(behind(40, 0.5, d - 10));                // a roof edge 0.5 m behind: 38.1 -> 36.5 m
+    steep.push_back({12.0f + (d - 13), d, 1.6f});                // 1 m per m: faster than any gap explains
+  }
+  const auto test = [](const std::vector<HeightEstimate>& e, double slope = 0.2, double change = 0.3) {
+    return showsParallax(e, slope, change, 2.0, 100.0);
+  };
+  EXPECT_FALSE(test(own));
+  EXPECT_TRUE(test(back));
+  EXPECT_FALSE(test(back, 0.0)) << "slope 0 turns the test off";
+  EXPECT_FALSE(test(back, 0.2, 4.0)) << "3 m across 7 m is not more than 4 m";
+  EXPECT_FALSE(test({back.begin(), back.begin() + 4})) << "fewer than 5 estimates";
+  EXPECT_TRUE(showsParallax(near_edge, 0.2, 0.3, 0.0, 100.0));
+  EXPECT_FALSE(test(near_edge)) << "a gap of 0.5 m is the object's own edge";
+  EXPECT_FALSE(test(steep)) << "no gap makes (h - c) fall faster than d";
+  EXPECT_FALSE(showsParallax(back, 0.2, 0.3, 2.0, 10.0)) << "a gap of 20 m is past 10 m";
+  // a camera that stands still: no slope to measure
+  EXPECT_FALSE(test(std::vector<HeightEstimate>(6, HeightEstimate{15.0f, 20.0f, 1.6f})));
+}
+
+// A wall at (3, 20), 12 m high, seen by a camera driving north from y = -10 to -1; in one drive its
+// own top is the topmost boundary, in the other an unsensed building 20 m behind it, 30 m high. The
+// first raises the wall to 12 m; the second is caught by its parallax and leaves the wall as sensed.
+TEST(BoundaryEstimationTest, AWallInFrontOfATallerUnsensedBuildingIsNotRaisedToItsSkyline) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  for (const bool own_top : {true, false}) {
+    VoxelMap map(VoxelMapConfig{0.2});
+    map.insert({Point3(3.05, 20.05, 1.05)}, 0);
+    map.voxels()[0].label = VoxelLabel::NonGround;
+    TerrainMesh mesh;
+    mesh.update(map, map.takeNewVoxels());
+    for (int step = 0; step < 10; ++step) {
+      Pose camera = northCamera();
+      camera.translation().y() = step - 10;
+      const Point3 edge = own_top ? Point3(3.1, 20.1, 12.0) : Point3(3.1, 40.1, 30.0);
+      const cv::Mat boundary = boundaryRowThrough(k, camera, edge);
+      ASSERT_FALSE(boundary.empty());
+      EXPECT_EQ(estimateBoundaries(mesh, map, boundary, k, camera, BoundaryEstimationConfig{}).estimated, 1);
+    }
+    const MeshVertex& m = mesh.vertices()[0];
+    ASSERT_EQ(m.estimates.size(), 10u);
+    EXPECT_EQ(m.parallax, !own_top);
+    if (own_top) {
+      EXPECT_TRUE(m.raised());
+      EXPECT_NEAR(m.height(), 12.0, 0.05);
+    } else {
+      // without the test the wall would stand between 16.1 and 18.6 m
+      EXPECT_GT(m.recovered_height, 16.0f);
+      EXPECT_FALSE(m.raised());
+      EXPECT_FLOAT_EQ(m.height(), m.sensed_height);
+    }
   }
 }
 
@@ -291,7 +355,7 @@ TEST(BoundaryEstimationTest, SharedOwnersGiveWhatOwnOwnersGive) {
   EXPECT_EQ(own_stats.estimated, shared_stats.estimated);
   // B turns out 15 m high, below the ray (22.4 m where it passes B): stale owners still say B may
   // own A's top, refreshed ones do not
-  mesh.addEstimate(b, 15.0f, 15);
+  mesh.addEstimate(b, {15.0f, 30.0f, 1.6f}, 15);
   const Point3 eye = world_from_camera.translation();
   const Vector3 dir = world_from_camera.linear() * pixelRay(k, top_px);
   const std::int32_t a_object = owners.objects().of[a];
@@ -306,7 +370,7 @@ TEST(BoundaryEstimationTest, SharedOwnersGiveWhatOwnOwnersGive) {
 TEST(BoundaryEstimationTest, EstimatesSpreadOverTheirObjectOnlyAndOnlySoFar) {
   const auto N = VoxelLabel::NonGround, G = VoxelLabel::Ground;
   Row row({N, N, N, N, G, N, N});
-  row.mesh.addEstimate(0, 12.0f, 15);
+  row.mesh.addEstimate(0, {12.0f, 10.0f, 1.6f}, 15);
   BoundaryEstimationConfig cfg;
   cfg.spread_distance = 0.5;  // 2 cells of 0.2 m
   EXPECT_EQ(spreadEstimates(row.mesh, row.map, cfg), 2);

@@ -24,7 +24,8 @@ struct Scene {
     for (const auto& c : ground) add(c, 0.0f, VoxelLabel::Ground);
     EXPECT_TRUE(map.restore(voxels));
     EXPECT_TRUE(mesh.restore(vertices));
-    for (std::size_t i = 0; i < raised && i < walls.size(); ++i) mesh.addEstimate(static_cast<std::uint32_t>(i), 10.0f, 15);
+    for (std::size_t i = 0; i < raised && i < walls.size(); ++i)
+      mesh.addEstimate(static_cast<std::uint32_t>(i), {10.0f, 20.0f, 1.6f}, 15);
   }
 };
 
