@@ -434,9 +434,9 @@ class SceneBuilder {
       << "    <material name=\"facade1\" texture=\"facade1\" texrepeat=\"6 6\"/>\n"
       << "    <material name=\"facade2\" texture=\"facade2\" texrepeat=\"6 6\"/>\n"
       << "    <material name=\"facade3\" texture=\"facade3\" texrepeat=\"6 6\"/>\n"
-      << "    <texture name=\"bark\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.3\" rgb1=\"0.36 0.26 0.17\" markrgb=\"0.22 0.16 0.1\" width=\"32\" height=\"32\"/>\n"
+      << "    <texture name=\"bark\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.3\" rgb1=\"0.36 0.26 0.17\" rgb2=\"0.36 0.26 0.17\" markrgb=\"0.22 0.16 0.1\" width=\"32\" height=\"32\"/>\n"
       << "    <material name=\"bark\" texture=\"bark\"/>\n"
-      << "    <texture name=\"leaves\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.35\" rgb1=\"0.13 0.38 0.12\" markrgb=\"0.3 0.55 0.2\" width=\"64\" height=\"64\"/>\n"
+      << "    <texture name=\"leaves\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.35\" rgb1=\"0.13 0.38 0.12\" rgb2=\"0.13 0.38 0.12\" markrgb=\"0.3 0.55 0.2\" width=\"64\" height=\"64\"/>\n"
       << "    <material name=\"leaves\" texture=\"leaves\"/>\n"
       << "    <material name=\"robot\" rgba=\"0.85 0.55 0.1 1\"/>\n";
     const TerrainTruth& t = truth_.terrain;
