@@ -94,6 +94,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"crown.max_trunk_gap", num(c.crown.max_trunk_gap)},
       {"crown.max_trunk_width", num(c.crown.max_trunk_width)},
       {"crown.max_grown_width", num(c.crown.max_grown_width)},
+      {"crown.min_trunk_height", num(c.crown.min_trunk_height)},
       {"crown.min_radius", num(c.crown.min_radius)},
       {"crown.max_radius", num(c.crown.max_radius)},
       {"crown.min_samples", integer(c.crown.min_samples)},
@@ -159,6 +160,8 @@ void validate(const PipelineConfig& c) {
   require(c.crown.max_trunk_width > 0 && c.crown.max_trunk_width <= 10, "crown.max_trunk_width", c.crown.max_trunk_width, "(0, 10] m");
   require(c.crown.max_grown_width >= c.crown.max_trunk_width && c.crown.max_grown_width <= 20, "crown.max_grown_width",
           c.crown.max_grown_width, "[crown.max_trunk_width, 20] m");
+  require(c.crown.min_trunk_height >= 0 && c.crown.min_trunk_height <= 20, "crown.min_trunk_height",
+          c.crown.min_trunk_height, "[0, 20] m");
   require(c.crown.min_radius >= 0 && c.crown.min_radius <= c.crown.max_radius, "crown.min_radius", c.crown.min_radius,
           "[0, crown.max_radius] m");
   require(c.crown.max_radius > 0 && c.crown.max_radius <= 50, "crown.max_radius", c.crown.max_radius, "(0, 50] m");
@@ -219,6 +222,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["crown"] = {{"enabled", c.crown.enabled}, {"cue", c.crown.cue == CrownConfig::Cue::Foliage ? "foliage" : "sky"},
                 {"foliage_margin", c.crown.foliage_margin}, {"max_trunk_gap", c.crown.max_trunk_gap},
                 {"max_trunk_width", c.crown.max_trunk_width}, {"max_grown_width", c.crown.max_grown_width},
+                {"min_trunk_height", c.crown.min_trunk_height},
                 {"min_radius", c.crown.min_radius}, {"max_radius", c.crown.max_radius},
                 {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
                 {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline},

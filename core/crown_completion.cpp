@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 namespace terrain {
@@ -16,7 +17,24 @@ struct Trunk {
   std::int32_t object = -1;
   Eigen::Vector2d centre;  // [m] mean of its cell centres
   double top = 0;          // [m] highest sensed height
+  CellIndex lo, hi;        // its cells' bounds
 };
+
+// Does the trunk stand at least min_height above the lowest ground vertex within 1 m of it? (Yes
+// when there is no ground there to compare with.)
+bool standsAboveGround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map, double min_height) {
+  const auto& vertices = mesh.vertices();
+  const int ring = static_cast<int>(std::ceil(1.0 / map.voxelSize()));
+  double ground = std::numeric_limits<double>::infinity();
+  for (int y = t.lo.y() - ring; y <= t.hi.y() + ring; ++y) {
+    for (int x = t.lo.x() - ring; x <= t.hi.x() + ring; ++x) {
+      const std::int64_t j = mesh.find(CellIndex(x, y));
+      if (j >= 0 && map.voxels()[vertices[j].top_voxel].label == VoxelLabel::Ground)
+        ground = std::min(ground, static_cast<double>(vertices[j].sensed_height));
+    }
+  }
+  return !std::isfinite(ground) || t.top - ground >= min_height;
+}
 
 std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects,
                               double max_width) {
@@ -44,7 +62,7 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
   for (std::int32_t o = 0; o < objects.count; ++o) {
     const Extent& e = extents[o];
     if (e.n == 0 || (e.x1 - e.x0 + 1) * cell > max_width || (e.y1 - e.y0 + 1) * cell > max_width) continue;
-    trunks.push_back({e.first, o, e.sum / e.n, e.top});
+    trunks.push_back({e.first, o, e.sum / e.n, e.top, CellIndex(e.x0, e.y0), CellIndex(e.x1, e.y1)});
   }
   return trunks;
 }
@@ -161,6 +179,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     if (sky_cfg.clear_line &&
         owners.otherMayOwn(centre, dir, reach, t.object, t.centre, 1.0, 1.0, foliage_cue ? &trunk_like : nullptr))
       continue;
+    // one that does not stand above its ground is measured for no crown (but may own one above)
+    if (!standsAboveGround(t, mesh, map, cfg.min_trunk_height)) continue;
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
     ++measured;
   }
@@ -181,7 +201,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     double baseline = 0;
     for (const Sample& a : it->second)
       baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
-    if (baseline < cfg.min_baseline) continue;
+    if (baseline < cfg.min_baseline || !standsAboveGround(t, mesh, map, cfg.min_trunk_height)) continue;
     // the top: the median sample, if the samples agree (a taller crown behind the column in some
     // frames moves with parallax); the radius: the lower quartile (a run widened by a crown beside
     // it errs only upwards)

@@ -197,6 +197,10 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   std::size_t under_crowns = 0;
   for (const auto& m : pipeline.mesh().vertices()) under_crowns += m.raised() && map.voxels()[m.top_voxel].label == VoxelLabel::Ground;
   hr["crown_ground_vertices"] = under_crowns;
+  // vertices whose estimates the parallax test held back (an edge behind them formed their skyline)
+  std::size_t parallax = 0;
+  for (const auto& m : pipeline.mesh().vertices()) parallax += m.parallax;
+  hr["parallax_vertices"] = parallax;
   json& list = hr["footprints"]["list"] = json::array();
   for (const auto& f : pipeline.footprints()) {
     json corners = json::array();

@@ -184,6 +184,19 @@ TEST(CrownCompletionTest, ATrunkWhoseReturnsSpreadAsTheDriveGoesOnKeepsItsCrown)
             0);
 }
 
+// A patch of terrain labelled non-ground, level with the ground around it, is no trunk, whatever
+// foliage stands above it in the image: the tree's trunk seen only 0.3 m up measures nothing unless
+// the minimum height is dropped.
+TEST(CrownCompletionTest, AnObjectLevelWithTheGroundAroundItIsNoTrunk) {
+  Tree low;
+  low.mesh.vertices()[low.mesh.find(CellIndex(0, 100))].sensed_height = 0.3f;
+  CrownConfig cfg;
+  CrownSampler sampler;
+  EXPECT_EQ(sampler.measure(low.mesh, low.map, low.image(), low.k, low.pose, cfg, BoundaryEstimationConfig{}), 0);
+  cfg.min_trunk_height = 0.2;
+  EXPECT_EQ(sampler.measure(low.mesh, low.map, low.image(), low.k, low.pose, cfg, BoundaryEstimationConfig{}), 1);
+}
+
 TEST(CrownCompletionTest, FoliageIsGreenAboveRedAndBlue) {
   EXPECT_TRUE(looksLikeFoliage(cv::Vec3b(20, 58, 18), 10));      // leaves in the simulated scenes, lit
   EXPECT_TRUE(looksLikeFoliage(cv::Vec3b(46, 84, 31), 10));      // their lighter marks
