@@ -222,7 +222,8 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
     // the distance first: it reads only the cell, the label reads the vertex's voxel
     const double x = (c.x() + 0.5) * cell, y = (c.y() + 0.5) * cell;
-    if (Eigen::Vector2d(x - centre.x(), y - centre.y()).norm() > cfg.max_distance) return;
+    const double distance = Eigen::Vector2d(x - centre.x(), y - centre.y()).norm();
+    if (distance > cfg.max_distance) return;
     MeshVertex& m = vertices[i];
     if (!nonGround(m, map)) return;
     const Point3 world(x, y, m.sensed_height);
@@ -246,9 +247,8 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
       ++stats.not_clear;
       return;
     }
-    const float distance = static_cast<float>(Eigen::Vector2d(x - centre.x(), y - centre.y()).norm());
-    mesh.addEstimate(i, {static_cast<float>(h), distance, static_cast<float>(centre.z())}, cfg.max_estimates,
-                     cfg.fusion_quantile);
+    mesh.addEstimate(i, {static_cast<float>(h), static_cast<float>(distance), static_cast<float>(centre.z())},
+                     cfg.max_estimates, cfg.fusion_quantile);
     m.parallax =
         showsParallax(m.estimates, cfg.parallax_slope, cfg.parallax_change, cfg.parallax_min_gap, cfg.parallax_max_gap);
     ++stats.estimated;

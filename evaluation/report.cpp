@@ -193,13 +193,14 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
                       {"building_cells", roof.building_cells},
                       {"wrongly_filled_cells", roof.wrongly_filled},
                       {"on_objects", errorJson(roof.on_objects)}};
-  // ground vertices raised under tree crowns (crown completion)
-  std::size_t under_crowns = 0;
-  for (const auto& m : pipeline.mesh().vertices()) under_crowns += m.raised() && map.voxels()[m.top_voxel].label == VoxelLabel::Ground;
+  // ground vertices raised under tree crowns (crown completion), and vertices whose estimates the
+  // parallax test held back (an edge behind them formed their skyline)
+  std::size_t under_crowns = 0, parallax = 0;
+  for (const auto& m : pipeline.mesh().vertices()) {
+    under_crowns += m.raised() && map.voxels()[m.top_voxel].label == VoxelLabel::Ground;
+    parallax += m.parallax;
+  }
   hr["crown_ground_vertices"] = under_crowns;
-  // vertices whose estimates the parallax test held back (an edge behind them formed their skyline)
-  std::size_t parallax = 0;
-  for (const auto& m : pipeline.mesh().vertices()) parallax += m.parallax;
   hr["parallax_vertices"] = parallax;
   json& list = hr["footprints"]["list"] = json::array();
   for (const auto& f : pipeline.footprints()) {
