@@ -151,6 +151,27 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       row(it.key() + " m, after", it.value()["after"]);
     }
   }
+  if (hr.contains("object_tops")) {
+    // each object whose top the camera saw: its true, sensed and recovered top
+    const auto& tops = hr["object_tops"];
+    h << "</table><h3>Object tops the camera saw</h3><p>";
+    for (const char* kind : {"building", "tree"}) {
+      const auto& t = tops[kind];
+      h << kind << "s at their real height (within 10 % of their height, at least 1 m): "
+        << t["at_height_before"].get<std::size_t>() << " sensed only, " << t["at_height_after"].get<std::size_t>()
+        << " after recovery, of " << t["top_seen"].get<std::size_t>() << ". ";
+    }
+    h << "</p><table><tr><th>object</th><th>class</th><th>true top m</th><th>sensed top m</th><th>recovered top m</th>"
+         "<th>error m</th><th>frames</th><th>cells</th></tr>";
+    for (auto it = tops["list"].begin(); it != tops["list"].end(); ++it) {
+      const auto& o = it.value();
+      const bool ok = std::abs(o["error_m"].get<double>()) <= o["tolerance_m"].get<double>();
+      h << "<tr><td style=\"text-align:left\">" << it.key() << "</td><td>" << o["class"].get<std::string>() << "</td><td>"
+        << fmt(o["true_top_m"]) << "</td><td>" << fmt(o["sensed_top_m"]) << "</td><td>" << fmt(o["recovered_top_m"])
+        << "</td><td" << (ok ? "" : " style=\"color:#b00\"") << ">" << fmt(o["error_m"]) << "</td><td>"
+        << o["frames_top_seen"].get<int>() << "</td><td>" << o["cells"].get<std::size_t>() << "</td></tr>";
+    }
+  }
   h << "</table><h3>Height map over object cells</h3><table><tr><th>method</th><th>coverage</th><th>MAE m</th><th>bias m</th></tr>";
   for (const char* m : {"sensed_only", "inpainting", "boundary_estimation"}) {
     if (!r["height_baselines"].contains(m)) continue;

@@ -106,6 +106,9 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
                "skip a frame's estimate when another sensed object stands in the vertex's image column (default: on)");
   cmd.add_flag("--sky-test,!--no-sky-test", c.estimation.require_sky_above,
                "accept a top boundary only with daylight sky just above it (default: on)");
+  cmd.add_flag("--foliage-tops,!--no-foliage-tops", c.estimation.foliage_tops,
+               "a vertex of a crown the lidar saw part of takes the end of the foliage above it as its top, not the "
+               "topmost boundary of its column (default: on)");
   cmd.add_flag("--footprints,!--no-footprints", c.footprint.enabled,
                "complete building footprints from two walls of a corner and roof them at the walls' recovered height "
                "(default: on)");
@@ -180,6 +183,16 @@ void printScorecard(const nlohmann::json& r) {
   }
   if (h.contains("crown_ground_vertices")) {
     std::cout << "    ground vertices raised under tree crowns: " << h["crown_ground_vertices"].get<std::size_t>() << "\n";
+  }
+  if (h.contains("object_tops")) {
+    std::cout << "    object tops the camera saw, at their real height (10 %, at least 1 m) sensed -> recovered:";
+    for (const char* k : {"building", "tree"}) {
+      const auto& t = h["object_tops"][k];
+      std::cout << " " << k << "s " << t["at_height_before"].get<std::size_t>() << " -> " << t["at_height_after"].get<std::size_t>()
+                << " of " << t["top_seen"].get<std::size_t>() << " (top MAE " << t["before"]["mae_m"].get<double>() << " -> "
+                << t["after"]["mae_m"].get<double>() << " m);";
+    }
+    std::cout << "\n";
   }
   if (r["height_baselines"].contains("inpainting")) {
     const auto& b = r["height_baselines"];

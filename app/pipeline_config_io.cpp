@@ -70,6 +70,8 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.require_sky_above", [&c](const YAML::Node& n) { c.estimation.require_sky_above = n.as<bool>(); }},
       {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
       {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
+      {"estimation.foliage_tops", [&c](const YAML::Node& n) { c.estimation.foliage_tops = n.as<bool>(); }},
+      {"estimation.foliage_margin", integer(c.estimation.foliage_margin)},
       {"estimation.spread_distance", num(c.estimation.spread_distance)},
       {"estimation.parallax_slope", num(c.estimation.parallax_slope)},
       {"estimation.parallax_change", num(c.estimation.parallax_change)},
@@ -168,6 +170,8 @@ void validate(const PipelineConfig& c) {
   require(c.crown.min_samples >= 1, "crown.min_samples", c.crown.min_samples, ">= 1");
   require(c.crown.foliage_margin >= 0 && c.crown.foliage_margin <= 255, "crown.foliage_margin", c.crown.foliage_margin,
           "[0, 255] grey levels");
+  require(c.estimation.foliage_margin >= 0 && c.estimation.foliage_margin <= 255, "estimation.foliage_margin",
+          c.estimation.foliage_margin, "[0, 255] grey levels");
   require(c.crown.max_trunk_gap >= 0 && c.crown.max_trunk_gap <= 100, "crown.max_trunk_gap", c.crown.max_trunk_gap,
           "[0, 100] m");
   require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
@@ -211,6 +215,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                      {"fusion_quantile", c.estimation.fusion_quantile},
                      {"clear_line", c.estimation.clear_line}, {"require_sky_above", c.estimation.require_sky_above},
                      {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
+                     {"foliage_tops", c.estimation.foliage_tops}, {"foliage_margin", c.estimation.foliage_margin},
                      {"spread_distance", c.estimation.spread_distance},
                      {"parallax_slope", c.estimation.parallax_slope}, {"parallax_change", c.estimation.parallax_change},
                      {"parallax_min_gap", c.estimation.parallax_min_gap}, {"parallax_max_gap", c.estimation.parallax_max_gap}};

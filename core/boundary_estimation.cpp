@@ -39,11 +39,60 @@ std::pair<CellIndex, CellIndex> cellsCovering(const Eigen::AlignedBox2d& box, do
           CellIndex(index(box.max().x(), 1), index(box.max().y(), 1))};
 }
 
+// objects wider than this either way [m] carry no crown of their own (foliage_tops)
+constexpr double kTrunkWidth = 1.5;
+
+// Per object of `objects` for the foliage tops: whether it shows foliage (at least half of its top
+// voxels that the camera coloured), and whether it may own a crown's pixel (it shows foliage or is
+// trunk-sized).
+struct FoliageObjects {
+  std::vector<char> leafy, may_own;
+};
+FoliageObjects foliageObjects(const MeshObjects& objects, const TerrainMesh& mesh, const VoxelMap& map, int margin) {
+  const auto& vertices = mesh.vertices();
+  const std::size_t n = static_cast<std::size_t>(objects.count);
+  std::vector<int> coloured(n, 0), foliage(n, 0);
+  std::vector<CellIndex> lo(n, CellIndex::Constant(std::numeric_limits<int>::max())),
+      hi(n, CellIndex::Constant(std::numeric_limits<int>::min()));
+  for (std::uint32_t j : objects.members) {
+    const std::size_t o = static_cast<std::size_t>(objects.of[j]);
+    const Voxel& top = map.voxels()[vertices[j].top_voxel];
+    if (top.coloured) ++coloured[o], foliage[o] += looksLikeFoliage(cv::Vec3b(top.r, top.g, top.b), margin);
+    lo[o] = lo[o].cwiseMin(vertices[j].cell), hi[o] = hi[o].cwiseMax(vertices[j].cell);
+  }
+  FoliageObjects out;
+  out.leafy.resize(n), out.may_own.resize(n);
+  for (std::size_t o = 0; o < n; ++o) {
+    out.leafy[o] = coloured[o] > 0 && 2 * foliage[o] >= coloured[o];
+    const CellIndex extent = hi[o] - lo[o] + CellIndex::Ones();
+    out.may_own[o] = out.leafy[o] || extent.cast<double>().maxCoeff() * map.voxelSize() <= kTrunkWidth;
+  }
+  return out;
+}
+
+// The vertex's top voxel stands at least 1 m above the lowest voxel of its column within 8 m below
+// it: the lidar saw the ground under it.
+bool standsOverGround(const MeshVertex& m, const VoxelMap& map) {
+  const Voxel& top = map.voxels()[m.top_voxel];
+  const int first = static_cast<int>(std::floor(0.8 / map.voxelSize()));
+  const int reach = static_cast<int>(std::ceil(8.0 / map.voxelSize()));
+  for (int dz = std::max(1, first); dz <= reach; ++dz) {
+    const std::int64_t q = map.find(VoxelIndex(top.index.x(), top.index.y(), top.index.z() - dz));
+    if (q >= 0 && top.height - map.voxels()[static_cast<std::size_t>(q)].height >= 1.0f) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
   const int r = c[0], g = c[1], b = c[2];
   return b >= r + blue_margin && b >= g && (r + g + b) / 3 >= min_brightness;
+}
+
+bool looksLikeFoliage(const cv::Vec3b& c, int margin) {
+  const int r = c[0], g = c[1], b = c[2];
+  return g >= r + margin && g >= b + margin;
 }
 
 bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, double change, double min_gap,
@@ -213,11 +262,19 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
   if (vertices.empty() || !centre.allFinite() || !(cfg.max_distance >= 0)) return stats;
+  // the objects in view: for the clear-line test and the foliage tops
+  const bool foliage_tops = cfg.foliage_tops && rgb.type() == CV_8UC3 && rgb.cols == cols;
   std::optional<SkylineOwners> own_owners;
-  const SkylineOwners* owners = cfg.clear_line ? given_owners : nullptr;
+  const SkylineOwners* in_view = cfg.clear_line || foliage_tops ? given_owners : nullptr;
   // only the vertices in view can be estimated: the cells of the image's sector up to max_distance
   const Eigen::AlignedBox2d view = viewRegion(k, world_from_camera, cfg.max_distance);
-  if (cfg.clear_line && !owners) owners = &own_owners.emplace(mesh, map, view);
+  if ((cfg.clear_line || foliage_tops) && !in_view) in_view = &own_owners.emplace(mesh, map, view);
+  const SkylineOwners* owners = cfg.clear_line ? in_view : nullptr;
+  const FoliageObjects foliage =
+      foliage_tops ? foliageObjects(in_view->objects(), mesh, map, cfg.foliage_margin) : FoliageObjects{};
+  const auto foliage_px = [&](int u, int row) {
+    return looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin);
+  };
   const auto [lo, hi] = cellsCovering(view, cell);
   mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
     // the distance first: it reads only the cell, the label reads the vertex's voxel
@@ -233,20 +290,31 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     // the object's top: the topmost boundary pixel in the column above the vertex
     const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
     if (u >= cols) return;
-    const int top = tops_px[u];
-    if (top < 0 || top > v || top <= cfg.top_margin) return;
-    if (sky_test && top < rgb.rows && !skyAbove(rgb, u, top, cfg)) {
-      ++stats.no_sky;
-      return;
+    int top = tops_px[u];
+    // a crown the lidar saw part of: its top is where the foliage above the vertex ends
+    const std::int32_t object = in_view ? in_view->objects().of[i] : -1;
+    const bool by_foliage = foliage_tops && object >= 0 && v < rgb.rows && foliage.leafy[object] && foliage_px(u, v) &&
+                            standsOverGround(m, map);
+    if (by_foliage) {
+      top = v;
+      while (top > 0 && foliage_px(u, top - 1)) --top;
+      if (top <= cfg.top_margin) return;
+    } else {
+      if (top < 0 || top > v || top <= cfg.top_margin) return;
+      if (sky_test && top < rgb.rows && !skyAbove(rgb, u, top, cfg)) {
+        ++stats.no_sky;
+        return;
+      }
     }
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) return;
-    if (owners &&
-        owners->otherMayOwn(centre, dir, cfg.max_distance, owners->objects().of[i], Eigen::Vector2d(x, y), 1.0, 1.0)) {
+    if (owners && owners->otherMayOwn(centre, dir, cfg.max_distance, object, Eigen::Vector2d(x, y), 1.0, 1.0,
+                                      by_foliage ? &foliage.may_own : nullptr)) {
       ++stats.not_clear;
       return;
     }
+    stats.by_foliage += by_foliage;
     mesh.addEstimate(i, {static_cast<float>(h), static_cast<float>(distance), static_cast<float>(centre.z())},
                      cfg.max_estimates, cfg.fusion_quantile);
     m.parallax =

@@ -48,6 +48,20 @@ struct BoundaryEstimationConfig {
   bool require_sky_above = true;
   int sky_blue_margin = 10;
   int sky_min_brightness = 100;
+  // Crown tops by their foliage (beyond the paper). The topmost boundary above a vertex of a tree
+  // crown that the lidar saw part of is the skyline behind the tree when a building or a taller
+  // tree stands there, and without sky just above the crown's top the sky test rejects it. A vertex
+  // takes as its top the end of the foliage run above its own pixel instead, with no sky test, when
+  //  - its object shows foliage: at least half of its top voxels that the camera coloured are
+  //    foliage-coloured (green at least foliage_margin grey levels above both red and blue);
+  //  - its pixel is foliage;
+  //  - it stands at least 1 m above the lowest voxel of its column: the ground the lidar saw under
+  //    the crown (a patch of grass labelled non-ground has none, and its foliage run would climb
+  //    the hillside behind it).
+  // For the clear-line test only objects that may carry a crown (foliage objects, and trunk-sized
+  // ones: 1.5 m across at most) may then own the pixel. A run that reaches top_margin is cut off.
+  bool foliage_tops = true;
+  int foliage_margin = 10;  // [grey levels]
   // Vertices of an object that never got an estimate of their own (the camera never saw their
   // column's top) take the recovered height of the nearest estimated vertex reachable through
   // neighbouring non-ground vertices, up to spread_distance away; 0 turns this off.
@@ -82,6 +96,10 @@ bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, d
 // The sky test's colour rule for one RGB colour: daylight sky is blue at least blue_margin grey
 // levels above red and not below green, with a mean brightness of at least min_brightness.
 bool looksLikeSky(const cv::Vec3b& rgb, int blue_margin, int min_brightness);
+
+// The foliage colour rule for one RGB colour: green at least margin grey levels above both red and
+// blue, as leaves in daylight.
+bool looksLikeFoliage(const cv::Vec3b& rgb, int margin);
 
 // The objects the lidar saw: 8-connected groups of mesh vertices whose top voxel is non-ground,
 // numbered in the order of their lowest vertex id. With a region (world x, y [m]), only the
@@ -135,17 +153,19 @@ class SkylineOwners {
 std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary);
 
 struct BoundaryEstimationStats {
-  int projected = 0;  // non-ground vertices that fell inside the image
-  int estimated = 0;  // of which received a height estimate
-  int no_sky = 0;     // of which were skipped: no sky above their top boundary
-  int not_clear = 0;  // of which were skipped: another object in their column (clear_line)
+  int projected = 0;   // non-ground vertices that fell inside the image
+  int estimated = 0;   // of which received a height estimate
+  int no_sky = 0;      // of which were skipped: no sky above their top boundary
+  int not_clear = 0;   // of which were skipped: another object in their column (clear_line)
+  int by_foliage = 0;  // of the estimated, those whose top is the end of their crown's foliage (foliage_tops)
 };
 
 // One frame: camera pose world_from_camera at the image time, the cleaned boundary image.
-// rgb: the camera image (CV_8UC3, RGB) for the sky test; may be empty (no test). owners: for the
-// clear-line test, made for this mesh over at least viewRegion(intrinsics, world_from_camera,
-// max_distance) (a caller that needs them too builds them once); nullptr: built here. Only the
-// vertices in that view region are looked at further than their cell.
+// rgb: the camera image (CV_8UC3, RGB) for the sky test and the foliage tops; may be empty (neither).
+// owners: the objects in view for the clear-line test and the foliage tops, made for this mesh over
+// at least viewRegion(intrinsics, world_from_camera, max_distance) (a caller that needs them too
+// builds them once); nullptr: built here. Only the vertices in that view region are looked at
+// further than their cell.
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& intrinsics, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& config, const cv::Mat& rgb = cv::Mat(),

@@ -75,11 +75,6 @@ bool parseCrownCue(const std::string& s, CrownConfig::Cue& out) {
   return false;
 }
 
-bool looksLikeFoliage(const cv::Vec3b& c, int margin) {
-  const int r = c[0], g = c[1], b = c[2];
-  return g >= r + margin && g >= b + margin;
-}
-
 double CrownSampler::ownersReach(const CrownConfig& config, const BoundaryEstimationConfig& estimation) {
   return estimation.max_distance + config.max_radius;
 }

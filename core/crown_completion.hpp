@@ -73,10 +73,6 @@ struct CrownConfig {
 // Parses "foliage"/"sky"; false if unknown.
 bool parseCrownCue(const std::string& s, CrownConfig::Cue& out);
 
-// The foliage cue's colour rule for one RGB colour: green at least margin grey levels above both red
-// and blue.
-bool looksLikeFoliage(const cv::Vec3b& rgb, int margin);
-
 // The crown samples of the trunks, gathered frame by frame.
 class CrownSampler {
  public:

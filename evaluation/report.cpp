@@ -108,6 +108,38 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
   return out;
 }
 
+std::map<std::string, int> topSeenFrames(const sim::World& world, const CameraIntrinsics& k,
+                                         const std::vector<CameraTruthFrame>& frames) {
+  // geom -> its object
+  std::map<int, const scenes::ObjectTruth*> object_of;
+  for (const auto& o : world.truth().objects) {
+    for (const auto& g : o.geoms) object_of[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = &o;
+  }
+  std::map<std::string, int> out;
+  for (const auto& f : frames) {
+    const cv::Mat& seg = f.segmentation;
+    const Eigen::Vector3d origin = f.world_from_camera.translation();
+    std::map<std::string, bool> seen;
+    for (int v = 1; v < seg.rows; ++v) {
+      for (int u = 0; u < seg.cols; ++u) {
+        const int g = seg.at<std::uint16_t>(v, u) - 1;
+        if (g == seg.at<std::uint16_t>(v - 1, u) - 1) continue;
+        const auto it = object_of.find(g);
+        if (it == object_of.end() || seen.count(it->second->id)) continue;
+        // the point the pixel looks at, on the object
+        const scenes::ObjectTruth& o = *it->second;
+        const Eigen::Vector3d dir = f.world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5));
+        const sim::RayHit hit = world.castRay(origin, dir);
+        if (hit.geom != g) continue;
+        const double z = origin.z() + hit.distance * dir.z();
+        if (z >= o.top_height - std::max(1.0, 0.15 * (o.top_height - o.base_height))) seen[o.id] = true;
+      }
+    }
+    for (const auto& [id, yes] : seen) out[id] += yes;
+  }
+  return out;
+}
+
 json timingJson(const std::vector<FrameRecord>& records) {
   std::map<std::string, std::vector<double>> stages;
   for (const auto& r : records) {
@@ -166,7 +198,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   }
 
   // heights of object vertices, before and after recovery
-  const HeightScores h = scoreHeights(pipeline.mesh(), map, world, truth.path);
+  const HeightScores h = scoreHeights(pipeline.mesh(), map, world, truth.path, pipeline.roofCells());
   json& hr = r["height_recovery"];
   hr["before"] = errorJson(h.before);
   hr["after"] = errorJson(h.after);
@@ -185,6 +217,36 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   }
   for (const auto& [kind, e] : h.by_kind) hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
+  // the tops of the objects whose top the camera saw: do they stand at their real height?
+  {
+    const std::map<std::string, int> seen = topSeenFrames(world, pipeline.calibration().camera, truth.cameras);
+    json& tops = hr["object_tops"];
+    json& list = tops["list"] = json::object();
+    struct Sum {
+      std::size_t seen = 0, before = 0, after = 0;
+      std::vector<double> e_before, e_after;
+    };
+    std::map<std::string, Sum> sums = {{"building", {}}, {"tree", {}}};
+    for (const auto& [id, t] : h.tops) {
+      const auto it = seen.find(id);
+      if (it == seen.end()) continue;
+      const double tol = topTolerance(t);
+      const double eb = std::isfinite(t.sensed) ? t.sensed - t.top : -(t.top - t.base);
+      const double ea = std::isfinite(t.recovered) ? t.recovered - t.top : eb;
+      Sum& s = sums[t.building ? "building" : "tree"];
+      ++s.seen;
+      s.before += std::abs(eb) <= tol, s.after += std::abs(ea) <= tol;
+      s.e_before.push_back(eb), s.e_after.push_back(ea);
+      list[id] = {{"class", t.building ? "building" : "tree"}, {"true_top_m", t.top}, {"sensed_top_m", t.sensed},
+                  {"recovered_top_m", t.recovered}, {"error_m", ea}, {"tolerance_m", tol},
+                  {"frames_top_seen", it->second}, {"cells", t.cells}};
+    }
+    for (const auto& [kind, s] : sums) {
+      tops[kind] = {{"top_seen", s.seen}, {"at_height_before", s.before}, {"at_height_after", s.after},
+                    {"before", errorJson(errorStats(s.e_before))}, {"after", errorJson(errorStats(s.e_after))}};
+    }
+    tops["frames"] = truth.cameras.size();
+  }
   // roofs of completed building footprints
   const RoofScores roof = scoreRoofCells(pipeline.roofCells(), map.voxelSize(), world);
   hr["footprints"] = {{"completed", pipeline.footprints().size()},

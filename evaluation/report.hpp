@@ -51,6 +51,12 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
                                   const sim::World& world, const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame,
                                   int tolerance);
 
+// The kept camera frames that saw each object's top, by object id: frames in which a top-boundary
+// pixel of the object (as in boundaryCoverage) looks at a point of it no more than 15 % of its
+// height, and at least 1 m, below its highest point. Objects whose top no frame saw are absent.
+std::map<std::string, int> topSeenFrames(const sim::World& world, const CameraIntrinsics& intrinsics,
+                                         const std::vector<CameraTruthFrame>& frames);
+
 struct EvaluationOptions {
   // score the ground segmentation baselines (fixed band, RANSAC plane, PCL's progressive
   // morphological filter); the filter takes about a minute on a map of a few million voxels

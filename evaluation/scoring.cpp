@@ -43,10 +43,20 @@ bool objectNearby(const sim::World& world, double x, double y, double radius) {
   return false;
 }
 
+// the 95th percentile (nearest rank) of a sample; NaN if it is empty
+double top95(std::vector<double>& v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t k = static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(v.size()))) - 1;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
 }  // namespace
 
+double topTolerance(const ObjectTop& t) { return std::max(1.0, 0.1 * (t.top - t.base)); }
+
 HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const sim::World& world,
-                          const std::vector<Point3>& robot_path) {
+                          const std::vector<Point3>& robot_path, const std::vector<RoofCell>& roof) {
   HeightScores out;
   const double voxel_size = map.voxelSize();
   std::vector<double> before, after, seen_before, seen_after;
@@ -56,6 +66,8 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
   for (const auto& o : world.truth().objects) {
     for (const auto& g : o.geoms) owner[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = o.id;
   }
+  // per object: the heights of its cells, sensed and recovered
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> heights;
   for (const auto& v : mesh.vertices()) {
     const double x = (v.cell.x() + 0.5) * voxel_size, y = (v.cell.y() + 0.5) * voxel_size;
     const CellTruth t = cellTruth(world, x, y, voxel_size);
@@ -90,7 +102,24 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
       objects[it->second].first.push_back(eb);
       objects[it->second].second.push_back(ea);
       out.in_view_by_object[it->second] += in_view;
+      heights[it->second].first.push_back(v.sensed_height);
+      heights[it->second].second.push_back(v.height());
     }
+  }
+  for (const auto& r : roof) {
+    const CellTruth t = cellTruth(world, (r.cell.x() + 0.5) * voxel_size, (r.cell.y() + 0.5) * voxel_size, voxel_size);
+    if (!t.object) continue;
+    if (auto it = owner.find(t.geom); it != owner.end()) heights[it->second].second.push_back(r.height);
+  }
+  for (const auto& o : world.truth().objects) {
+    auto it = heights.find(o.id);
+    if (it == heights.end()) continue;
+    ObjectTop& top = out.tops[o.id];
+    top.building = o.object_class == scenes::GeomClass::Building;
+    top.base = o.base_height, top.top = o.top_height;
+    top.cells = it->second.second.size();
+    top.sensed = top95(it->second.first);
+    top.recovered = top95(it->second.second);
   }
   out.before = errorStats(before);
   out.after = errorStats(after);

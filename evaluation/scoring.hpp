@@ -7,6 +7,7 @@
 #include "evaluation/ground_truth.hpp"
 #include "evaluation/metrics.hpp"
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -20,6 +21,21 @@ struct SegmentationScores {
 
 // Scores per voxel of a labelling (ground[i] for map voxel i) against the voxel truth.
 SegmentationScores scoreVoxels(const VoxelMap& map, const std::vector<std::uint8_t>& ground, const VoxelTruth& truth);
+
+// An object's top as the mesh shows it: the 95th percentile of the heights of the cells whose true
+// top is the object (mesh vertices, and for the recovered top also the roof cells of completed
+// footprints), so that a few stray cells neither make nor break it.
+struct ObjectTop {
+  bool building = false;  // else a tree
+  double base = 0, top = 0;  // [m] true world z of the object's base and highest point
+  double sensed = std::numeric_limits<double>::quiet_NaN();     // [m] sensed heights only
+  double recovered = std::numeric_limits<double>::quiet_NaN();  // [m] after recovery
+  std::size_t cells = 0;  // mesh vertices and roof cells whose true top is the object
+};
+
+// The tolerance [m] within which a recovered top counts as the object's real height: 10 % of its
+// height above its base, at least 1 m.
+double topTolerance(const ObjectTop& t);
 
 struct HeightScores {
   ErrorStats before, after;  // over object cells: sensed-only heights, then after recovery
@@ -41,12 +57,14 @@ struct HeightScores {
   // 0.5 m: the cell took the object's points through a small pose or beam error)
   std::size_t raised_terrain_cells = 0;
   std::size_t raised_edge_cells = 0;
+  std::map<std::string, ObjectTop> tops;  // object id -> its top, for the objects with cells
 };
 
 // Height errors of the mesh vertices over cells where an object is the true top. robot_path: the
-// true robot positions, for the distance bands (distance of a cell to the nearest of them).
+// true robot positions, for the distance bands (distance of a cell to the nearest of them). roof:
+// the roof cells of completed footprints, which join the objects' recovered tops.
 HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const sim::World& world,
-                          const std::vector<Point3>& robot_path);
+                          const std::vector<Point3>& robot_path, const std::vector<RoofCell>& roof = {});
 
 // Roof cells of completed building footprints (cells the mesh has no vertex for) against the truth:
 // on an object's cell the error of the roof height; elsewhere the cell was filled wrongly.

@@ -44,6 +44,9 @@ class World {
   double terrainHeight(double x, double y) const;
   // True height [m] of the highest surface at (x, y): terrain or any object; NaN if none.
   double surfaceHeight(double x, double y, int* geom = nullptr) const;
+  // Nearest surface along origin + x * dir, x >= 0, over every geom but the robot's (mj_ray's
+  // semantics); distance -1 and geom -1 if none.
+  RayHit castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const { return caster_->cast(origin, dir); }
 
  private:
   void finishLoading();

@@ -196,6 +196,77 @@ TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
   }
 }
 
+// A crown the lidar saw the underside of, at (3, 20), 3 m up and topped at 6 m, seen from the origin
+// looking north against a grey building 40 m away whose roof, 20 m up, is the topmost boundary of
+// its column, with sky above. The topmost boundary raises the crown to where its ray passes over
+// it, 1.6 + 18.4 / 2 = 10.8 m; the end of the foliage above the vertex's pixel gives its own top,
+// when the crown shows foliage and stands over the ground the lidar saw under it.
+TEST(BoundaryEstimationTest, ACrownBeforeABuildingTakesTheTopOfItsFoliage) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  const Pose world_from_camera = northCamera();
+  const Pose camera_from_world = world_from_camera.inverse();
+  const auto row = [&](const Point3& p) { return static_cast<int>(project(k, camera_from_world * p)->y()); };
+  const int crown_top = row(Point3(3.1, 20.1, 6.0)), roof = row(Point3(6.2, 40.2, 20.0));
+  // sky over the roof, the grey facade below it, the crown's green from its top down to the ground
+  cv::Mat rgb(480, 640, CV_8UC3, cv::Scalar(120, 160, 230));
+  rgb.rowRange(roof, 480).setTo(cv::Scalar(150, 150, 150));
+  rgb(cv::Range(crown_top, row(Point3(3.1, 20.1, 0.0))), cv::Range(300, 500)).setTo(cv::Scalar(40, 110, 35));
+  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
+  boundary.row(roof).setTo(255);
+  boundary.row(crown_top).setTo(255);
+  struct Case {
+    bool foliage_tops, clear_line, leafy, ground_below, wide_building;
+    double height;  // expected; 0: no estimate
+  };
+  for (const Case c :
+       {Case{true, true, true, true, true, 6.0},
+        // the paper's topmost boundary; with the clear-line test the building, whose top is unknown, may own it
+        Case{false, false, true, true, true, 10.8}, Case{false, true, true, true, true, 0.0},
+        // no foliage object, or none over ground the lidar saw
+        Case{true, false, false, true, true, 10.8}, Case{true, false, true, false, true, 10.8},
+        // an object as narrow as a trunk may carry a crown that owns the pixel
+        Case{true, true, true, true, false, 0.0}}) {
+    VoxelMap map(VoxelMapConfig{0.2});
+    // the crown's underside over the ground the lidar saw beneath it
+    std::vector<Point3> points{Point3(3.05, 20.05, 3.05)};
+    if (c.ground_below) points.emplace_back(3.05, 20.05, 0.05);
+    // the building's wall at the lidar's reach: 3 m wide, or one voxel (as narrow as a trunk)
+    const int wall = c.wide_building ? 15 : 1;
+    for (int i = 0; i < wall; ++i) points.emplace_back(6.05 + 0.2 * i, 40.05, 1.05);
+    map.insert(points, 0);
+    for (auto& v : map.voxels()) {
+      const bool crown = v.index.y() == 100 && v.index.z() == 15;
+      v.label = v.index.z() == 0 ? VoxelLabel::Ground : VoxelLabel::NonGround;
+      v.coloured = true;
+      if (crown && c.leafy)
+        v.r = 40, v.g = 110, v.b = 35;
+      else
+        v.r = v.g = v.b = 150;
+    }
+    TerrainMesh mesh;
+    mesh.update(map, map.takeNewVoxels());
+    const std::int64_t crown = mesh.find(CellIndex(15, 100));
+    ASSERT_GE(crown, 0);
+    BoundaryEstimationConfig cfg;
+    cfg.foliage_tops = c.foliage_tops;
+    cfg.clear_line = c.clear_line;
+    const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, rgb);
+    const MeshVertex& m = mesh.vertices()[crown];
+    const std::string what = "foliage_tops " + std::to_string(c.foliage_tops) + ", clear_line " +
+                             std::to_string(c.clear_line) + ", leafy " + std::to_string(c.leafy) + ", ground below " +
+                             std::to_string(c.ground_below) + ", wide " + std::to_string(c.wide_building);
+    if (c.height == 0) {
+      EXPECT_TRUE(m.estimates.empty()) << what;
+      EXPECT_GE(stats.not_clear, 1) << what;
+      continue;
+    }
+    ASSERT_EQ(m.estimates.size(), 1u) << what;
+    // a pixel is 6 cm high at 20 m
+    EXPECT_NEAR(m.height(), c.height, 0.1) << what;
+    EXPECT_EQ(stats.by_foliage, c.height == 6.0 ? 1 : 0) << what;
+  }
+}
+
 // Estimates of a top edge over the vertex stay put as the camera nears; those of an edge behind it
 // (height H, gap g) fall as c + (H - c) d / (d + g). Hand-computed heights for a camera 1.6 m up.
 TEST(BoundaryEstimationTest, ParallaxTestTellsAnEdgeBehindFromTheVertexsOwn) {

@@ -1,4 +1,5 @@
 #include "evaluation/metrics.hpp"
+#include "core/camera_model.hpp"
 #include "evaluation/report.hpp"
 #include "evaluation/scoring.hpp"
 #include "tests/test_support.hpp"
@@ -88,6 +89,68 @@ TEST(FootprintMatchTest, FindsTheBuildingUnderAFootprintAndTheirOverlap) {
   EXPECT_NEAR(half.iou, 60.0 / 2040.0, 1e-12);
   // on open ground: no building
   EXPECT_TRUE(matchFootprint(rectangle(20, 22, -2, 2), *world, 0.2).object.empty());
+}
+
+// The wall of test::wallWorld at x = 12 (20 m high): of 20 of its cells in the mesh, sensed 3 m up,
+// 19 were raised to 19.6 m; their 95th percentile is the wall's recovered top, within 10 % of its
+// height (2 m) of the truth. Roof cells join the recovered top: 5 at 30 m lift it to 30 m.
+TEST(ObjectTopTest, AnObjectsTopIsThe95thPercentileOfItsCellsHeights) {
+  const auto world = test::wallWorld(12.0);
+  std::vector<Voxel> voxels;
+  std::vector<MeshVertex> vertices;
+  for (int j = 0; j < 20; ++j) {
+    test::addColumn(voxels, vertices, CellIndex(62, j), 15, 3.0f, VoxelLabel::NonGround);
+    if (j > 0) vertices.back().estimates = {{19.6f, 12.0f, 1.6f}}, vertices.back().recovered_height = 19.6f;
+  }
+  VoxelMap map(VoxelMapConfig{0.2});
+  ASSERT_TRUE(map.restore(voxels));
+  TerrainMesh mesh;
+  ASSERT_TRUE(mesh.restore(vertices));
+  const HeightScores h = scoreHeights(mesh, map, *world, {Point3(0, 0, 0)});
+  ASSERT_EQ(h.tops.count("wall"), 1u);
+  const ObjectTop& t = h.tops.at("wall");
+  EXPECT_TRUE(t.building);
+  EXPECT_EQ(t.cells, 20u);
+  EXPECT_DOUBLE_EQ(t.top, 20.0);
+  EXPECT_DOUBLE_EQ(t.sensed, 3.0);
+  EXPECT_NEAR(t.recovered, 19.6, 1e-6);
+  EXPECT_DOUBLE_EQ(topTolerance(t), 2.0);
+  std::vector<RoofCell> roof;
+  for (int j = 20; j < 25; ++j) roof.push_back({CellIndex(62, j), 30.0f});
+  const ObjectTop& with_roof = scoreHeights(mesh, map, *world, {Point3(0, 0, 0)}, roof).tops.at("wall");
+  EXPECT_EQ(with_roof.cells, 25u);
+  EXPECT_NEAR(with_roof.recovered, 30.0, 1e-6);
+  EXPECT_DOUBLE_EQ(with_roof.sensed, 3.0);
+}
+
+// A camera 1.6 m up looking east at the 20 m wall: from 40 m its top edge is in the image (the
+// pixels just below it look at the wall's top), from 8 m it is above the image (the topmost wall
+// pixels look at it 1.6 + 8 tan 30 deg = 6.2 m up, far below its top).
+TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtIt) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(160, 120, 60 * M_PI / 180);
+  std::vector<CameraTruthFrame> frames;
+  for (const double distance : {40.0, 8.0}) {
+    const auto world = test::wallWorld(distance);
+    CameraTruthFrame f;
+    f.world_from_camera.linear().col(0) = Vector3(0, -1, 0);  // right = south
+    f.world_from_camera.linear().col(1) = Vector3(0, 0, -1);  // down
+    f.world_from_camera.linear().col(2) = Vector3(1, 0, 0);   // forward = east
+    f.world_from_camera.translation() = Vector3(0, 0, 1.6);
+    // the true segmentation: the geom each pixel sees, + 1 (0: sky)
+    f.segmentation = cv::Mat(k.height, k.width, CV_16UC1, cv::Scalar(0));
+    for (int v = 0; v < k.height; ++v) {
+      for (int u = 0; u < k.width; ++u) {
+        const Vector3 dir = f.world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5));
+        f.segmentation.at<std::uint16_t>(v, u) =
+            static_cast<std::uint16_t>(world->castRay(f.world_from_camera.translation(), dir).geom + 1);
+      }
+    }
+    const auto seen = topSeenFrames(*world, k, {f});
+    EXPECT_EQ(seen.count("wall"), distance > 20 ? 1u : 0u) << distance;
+    if (distance > 20) {
+      EXPECT_EQ(seen.at("wall"), 1);
+    }
+  }
 }
 
 }  // namespace
