@@ -77,6 +77,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.parallax_change", num(c.estimation.parallax_change)},
       {"estimation.parallax_min_gap", num(c.estimation.parallax_min_gap)},
       {"estimation.parallax_max_gap", num(c.estimation.parallax_max_gap)},
+      {"estimation.parallax_min_t", num(c.estimation.parallax_min_t)},
       {"footprint.enabled", [&c](const YAML::Node& n) { c.footprint.enabled = n.as<bool>(); }},
       {"footprint.min_side", num(c.footprint.min_side)},
       {"footprint.wall_tolerance", num(c.footprint.wall_tolerance)},
@@ -145,6 +146,8 @@ void validate(const PipelineConfig& c) {
           "estimation.parallax_min_gap", c.estimation.parallax_min_gap, "[0, estimation.parallax_max_gap] m");
   require(c.estimation.parallax_max_gap >= 0 && c.estimation.parallax_max_gap <= 1e4, "estimation.parallax_max_gap",
           c.estimation.parallax_max_gap, "[0, 10000] m");
+  require(c.estimation.parallax_min_t >= 0 && c.estimation.parallax_min_t <= 1e6, "estimation.parallax_min_t",
+          c.estimation.parallax_min_t, "[0, 1e6] standard errors");
   require(c.estimation.spread_distance >= 0 && c.estimation.spread_distance <= 200, "estimation.spread_distance",
           c.estimation.spread_distance, "[0, 200] m");
   require(c.footprint.min_side > 0, "footprint.min_side", c.footprint.min_side, "> 0 m");
@@ -218,7 +221,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                      {"foliage_tops", c.estimation.foliage_tops}, {"foliage_margin", c.estimation.foliage_margin},
                      {"spread_distance", c.estimation.spread_distance},
                      {"parallax_slope", c.estimation.parallax_slope}, {"parallax_change", c.estimation.parallax_change},
-                     {"parallax_min_gap", c.estimation.parallax_min_gap}, {"parallax_max_gap", c.estimation.parallax_max_gap}};
+                     {"parallax_min_gap", c.estimation.parallax_min_gap}, {"parallax_max_gap", c.estimation.parallax_max_gap},
+                     {"parallax_min_t", c.estimation.parallax_min_t}};
   j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
                     {"wall_tolerance", c.footprint.wall_tolerance}, {"wall_band", c.footprint.wall_band},
                     {"min_wall_share", c.footprint.min_wall_share},

@@ -96,8 +96,8 @@ bool looksLikeFoliage(const cv::Vec3b& c, int margin) {
 }
 
 bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, double change, double min_gap,
-                   double max_gap) {
-  if (!(slope > 0) || estimates.size() < 5) return false;
+                   double max_gap, double min_t) {
+  if (!(slope > 0) || estimates.size() < kParallaxEstimates) return false;
   double md = 0, mh = 0, rise = 0;
   float lo = estimates.front().distance, hi = lo;
   for (const auto& e : estimates) {
@@ -111,12 +111,44 @@ bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, d
     sdd += (e.distance - md) * (e.distance - md), sdh += (e.distance - md) * (e.height - mh);
   if (!(sdd > 0) || !(rise > 0)) return false;
   const double b = sdh / sdd;
-  if (!(b > slope && b * (hi - lo) > change)) return false;
-  // the gap behind the vertex that would give this slope: g / (d + g) = b d / (h - c)
-  const double e = b * md / rise;
-  if (!(e < 1)) return false;
-  const double gap = e * md / (1 - e);
+  if (!(std::abs(b) > slope && std::abs(b) * (hi - lo) > change)) return false;
+  // the slope must stand out from the scatter about the line (pose noise on rough ground makes steep
+  // slopes over a metre or two of driving): at least min_t standard errors
+  double scatter = 0;
+  for (const auto& e : estimates) {
+    const double r = e.height - mh - b * (e.distance - md);
+    scatter += r * r;
+  }
+  if (std::abs(b) < min_t * std::sqrt(scatter / (n - 2) / sdd)) return false;
+  // the gap that would give this slope: behind the vertex g / (d + g) = b d / (h - c), in front of
+  // it g / (d - g) = -b d / (h - c)
+  const double e = std::abs(b) * md / rise;
+  if (b > 0 && !(e < 1)) return false;
+  const double gap = b > 0 ? e * md / (1 - e) : e * md / (1 + e);
   return gap >= min_gap && gap <= max_gap;
+}
+
+int holdBackYoungVertices(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& cfg) {
+  if (!(cfg.parallax_slope > 0)) return 0;
+  auto& vertices = mesh.vertices();
+  const int ring = static_cast<int>(std::ceil(1.0 / map.voxelSize()));
+  // decided from the neighbours as they stand, then applied: the order of the vertices does not matter
+  std::vector<std::uint32_t> hold;
+  for (std::uint32_t i = 0; i < vertices.size(); ++i) {
+    const MeshVertex& m = vertices[i];
+    if (!m.estimated() || m.estimates.size() >= kParallaxEstimates || !nonGround(m, map)) continue;
+    int held = 0, stand = 0;
+    for (int dy = -ring; dy <= ring; ++dy) {
+      for (int dx = -ring; dx <= ring; ++dx) {
+        const std::int64_t j = mesh.find(m.cell + CellIndex(dx, dy));
+        if (j < 0 || vertices[j].estimates.size() < kParallaxEstimates || !nonGround(vertices[j], map)) continue;
+        ++(vertices[j].parallax ? held : stand);
+      }
+    }
+    if (held > stand) hold.push_back(i);
+  }
+  for (std::uint32_t i : hold) vertices[i].parallax = true;
+  return static_cast<int>(hold.size());
 }
 
 MeshObjects findMeshObjects(const TerrainMesh& mesh, const VoxelMap& map, const Eigen::AlignedBox2d* region) {
@@ -317,8 +349,8 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     stats.by_foliage += by_foliage;
     mesh.addEstimate(i, {static_cast<float>(h), static_cast<float>(distance), static_cast<float>(centre.z())},
                      cfg.max_estimates, cfg.fusion_quantile);
-    m.parallax =
-        showsParallax(m.estimates, cfg.parallax_slope, cfg.parallax_change, cfg.parallax_min_gap, cfg.parallax_max_gap);
+    m.parallax = showsParallax(m.estimates, cfg.parallax_slope, cfg.parallax_change, cfg.parallax_min_gap,
+                               cfg.parallax_max_gap, cfg.parallax_min_t);
     ++stats.estimated;
   });
   return stats;

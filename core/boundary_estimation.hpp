@@ -79,19 +79,36 @@ struct BoundaryEstimationConfig {
   // of 15-20 m). The gap's bounds keep what is not a second object: a wall's sensed cells a little
   // in front of its roof edge (on a 40 m building, urban seed 4), and slopes steeper than any gap
   // explains (the camera's pose noise; implied gaps of 228 m and more on urban seed 1).
+  // An edge a gap g in front of the vertex (an object nearer the camera that the lidar did not see
+  // up there: a tree's crown, whose trunk is thinner than the ray's column) gives
+  // c + (H - c) d / (d - g), which rises as the camera nears: slope -(h - c) g / (d (d - g)), so
+  // g = e d / (1 + e) with e = -b d / (h - c); the same bounds apply. On urban seed 3 the walls of a
+  // 21 m building 96-100 m away had estimates rising from 43 to 51 m over 9 m of driving, the top
+  // edge of a tree's crown 30 m from the camera (gap 68 m); their roof stood at 49 m. Either way the
+  // slope must also be at least parallax_min_t standard errors (of the least-squares line through
+  // the estimates): on rough ground the pitching camera made slopes of -0.4 to -3.6 m/m over 1-3 m
+  // of driving at 77 m, 1-9 standard errors, against 20 and more for the crown's edge.
+  // A vertex with fewer estimates than the test needs is held back at the end of the run when, of the
+  // non-ground vertices within 1 m that have enough, more are held back than not
+  // (holdBackYoungVertices): a wall's last vertices, sensed as the robot neared, saw the same edge.
   // parallax_slope 0 turns the test off.
   double parallax_slope = 0.2;      // [m of height per m of distance]
   double parallax_change = 0.3;     // [m]
   double parallax_min_gap = 2.0;    // [m]
   double parallax_max_gap = 100.0;  // [m]
+  double parallax_min_t = 8.0;      // [standard errors of the slope]
 };
 
+// estimates a vertex needs before the parallax test can tell
+constexpr std::size_t kParallaxEstimates = 5;
+
 // The parallax test on a vertex's estimates (see BoundaryEstimationConfig::parallax_slope): true
-// when they hold at least 5 estimates whose heights rise with the distance they were made from by
-// more than `slope` per metre and by more than `change` across those distances, as an edge between
-// min_gap and max_gap behind the vertex would make them.
+// when they hold at least kParallaxEstimates estimates whose heights rise or fall with the distance
+// they were made from by more than `slope` per metre, by more than `change` across those distances
+// and by at least min_t standard errors of the slope, as an edge between min_gap and max_gap behind
+// the vertex (rising with distance) or in front of it (falling) would make them.
 bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, double change, double min_gap,
-                   double max_gap);
+                   double max_gap, double min_t);
 
 // The sky test's colour rule for one RGB colour: daylight sky is blue at least blue_margin grey
 // levels above red and not below green, with a mean brightness of at least min_brightness.
@@ -176,5 +193,10 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
 // vertex without estimates takes the height of the nearest one (ties: the lower vertex id).
 // Returns the number of vertices that took a height.
 int spreadEstimates(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& config);
+
+// At the end of a run: a vertex with too few estimates for the parallax test (fewer than 5) is held
+// back too when, of the non-ground vertices within 1 m that have enough, more show parallax than do
+// not: they saw the same edges. Returns the number of vertices held back.
+int holdBackYoungVertices(TerrainMesh& mesh, const VoxelMap& map, const BoundaryEstimationConfig& config);
 
 }  // namespace terrain

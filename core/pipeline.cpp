@@ -99,6 +99,7 @@ void Pipeline::finish() {
   for (auto& m : mesh_.vertices()) {
     if (map_.voxels()[m.top_voxel].label == VoxelLabel::Ground) m.estimates.clear(), m.parallax = false;
   }
+  holdBackYoungVertices(mesh_, map_, config_.estimation);
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
   crowns_.apply(mesh_, map_, config_.crown);

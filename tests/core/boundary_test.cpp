@@ -268,33 +268,87 @@ TEST(BoundaryEstimationTest, ACrownBeforeABuildingTakesTheTopOfItsFoliage) {
 }
 
 // Estimates of a top edge over the vertex stay put as the camera nears; those of an edge behind it
-// (height H, gap g) fall as c + (H - c) d / (d + g). Hand-computed heights for a camera 1.6 m up.
-TEST(BoundaryEstimationTest, ParallaxTestTellsAnEdgeBehindFromTheVertexsOwn) {
+// (height H, gap g) fall as c + (H - c) d / (d + g), those of an edge in front rise as
+// c + (H - c) d / (d - g). Hand-computed heights for a camera 1.6 m up.
+TEST(BoundaryEstimationTest, ParallaxTestTellsAnEdgeBehindOrInFrontFromTheVertexsOwn) {
   const auto behind = [](double top, double gap, double d) {
     return HeightEstimate{static_cast<float>(1.6 + (top - 1.6) * d / (d + gap)), static_cast<float>(d), 1.6f};
   };
-  std::vector<HeightEstimate> own, back, near_edge, steep;
+  std::vector<HeightEstimate> own, back, near_edge, steep, front, scattered;
   for (int i = 0; i < 8; ++i) {
     const float d = 20.0f - i;
     own.push_back({12.0f + 0.02f * (i % 2 ? 1 : -1), d, 1.6f});  // a pixel's jitter
     back.push_back(behind(30, 20, d));                           // 15.8 m at 20 m, 12.8 m at 13 m
     near_edge.push_back(behind(40, 0.5, d - 10));                // a roof edge 0.5 m behind: 38.1 -> 36.5 m
     steep.push_back({12.0f + (d - 13), d, 1.6f});                // 1 m per m: faster than any gap explains
+    front.push_back(behind(14, -8, d));                          // a crown's edge 8 m nearer: 22.3 -> 33.8 m
+    // falling by 0.5 m per m, give or take 3 m: 1.1 standard errors
+    scattered.push_back({static_cast<float>(20.0 - 0.5 * (d - 13) + (i % 2 ? 3 : -3)), d, 1.6f});
   }
   const auto test = [](const std::vector<HeightEstimate>& e, double slope = 0.2, double change = 0.3) {
-    return showsParallax(e, slope, change, 2.0, 100.0);
+    return showsParallax(e, slope, change, 2.0, 100.0, 8.0);
   };
   EXPECT_FALSE(test(own));
   EXPECT_TRUE(test(back));
   EXPECT_FALSE(test(back, 0.0)) << "slope 0 turns the test off";
   EXPECT_FALSE(test(back, 0.2, 4.0)) << "3 m across 7 m is not more than 4 m";
   EXPECT_FALSE(test({back.begin(), back.begin() + 4})) << "fewer than 5 estimates";
-  EXPECT_TRUE(showsParallax(near_edge, 0.2, 0.3, 0.0, 100.0));
-  EXPECT_FALSE(test(near_edge)) << "a gap of 0.5 m is the object's own edge";
+  // (a curved series: 7.6 standard errors of the straight line's slope; min_t 0 leaves the gap to tell)
+  EXPECT_TRUE(showsParallax(near_edge, 0.2, 0.3, 0.0, 100.0, 0.0));
+  EXPECT_FALSE(showsParallax(near_edge, 0.2, 0.3, 2.0, 100.0, 0.0)) << "a gap of 0.5 m is the object's own edge";
   EXPECT_FALSE(test(steep)) << "no gap makes (h - c) fall faster than d";
-  EXPECT_FALSE(showsParallax(back, 0.2, 0.3, 2.0, 10.0)) << "a gap of 20 m is past 10 m";
+  EXPECT_FALSE(showsParallax(back, 0.2, 0.3, 2.0, 10.0, 8.0)) << "a gap of 20 m is past 10 m";
+  EXPECT_TRUE(test(front)) << "an edge 8 m in front";
+  EXPECT_FALSE(showsParallax(front, 0.2, 0.3, 2.0, 5.0, 8.0)) << "a gap of 8 m is past 5 m";
+  EXPECT_FALSE(test(scattered)) << "a slope lost in the scatter";
+  EXPECT_TRUE(showsParallax(scattered, 0.2, 0.3, 2.0, 100.0, 0.0)) << "min_t 0 takes any slope";
   // a camera that stands still: no slope to measure
   EXPECT_FALSE(test(std::vector<HeightEstimate>(6, HeightEstimate{15.0f, 20.0f, 1.6f})));
+}
+
+// A vertex with 2 estimates amid a wall's vertices with 6 each: held back when more of those within
+// 1 m are held back than stand, whatever it shows itself; left alone otherwise, and when the test is off.
+TEST(BoundaryEstimationTest, AYoungVertexFollowsItsNeighboursParallax) {
+  for (const int held : {0, 3, 4, 5, 8}) {
+    std::vector<Voxel> voxels;
+    std::vector<MeshVertex> vertices;
+    int n = 0;
+    for (int y = -1; y <= 1; ++y) {
+      for (int x = -1; x <= 1; ++x) {
+        test::addColumn(voxels, vertices, CellIndex(x, y), 10, 2.0f, VoxelLabel::NonGround);
+        MeshVertex& m = vertices.back();
+        const bool centre = x == 0 && y == 0;
+        m.estimates.assign(centre ? 2 : 6, HeightEstimate{12.0f, 20.0f, 1.6f});
+        m.recovered_height = 12.0f;
+        if (!centre) m.parallax = n++ < held;
+      }
+    }
+    VoxelMap map(VoxelMapConfig{0.2});
+    ASSERT_TRUE(map.restore(voxels));
+    TerrainMesh mesh;
+    ASSERT_TRUE(mesh.restore(vertices));
+    const std::int64_t centre = mesh.find(CellIndex(0, 0));
+    BoundaryEstimationConfig cfg;
+    EXPECT_EQ(holdBackYoungVertices(mesh, map, cfg), held > 4 ? 1 : 0) << held;
+    EXPECT_EQ(mesh.vertices()[centre].parallax, held > 4) << held;
+    EXPECT_EQ(mesh.vertices()[centre].estimated(), held <= 4) << held;
+  }
+  // off with the parallax test
+  std::vector<Voxel> voxels;
+  std::vector<MeshVertex> vertices;
+  test::addColumn(voxels, vertices, CellIndex(0, 0), 10, 2.0f, VoxelLabel::NonGround);
+  vertices.back().estimates.assign(2, HeightEstimate{12.0f, 20.0f, 1.6f});
+  test::addColumn(voxels, vertices, CellIndex(1, 0), 10, 2.0f, VoxelLabel::NonGround);
+  vertices.back().estimates.assign(6, HeightEstimate{12.0f, 20.0f, 1.6f});
+  vertices.back().parallax = true;
+  VoxelMap map(VoxelMapConfig{0.2});
+  ASSERT_TRUE(map.restore(voxels));
+  TerrainMesh mesh;
+  ASSERT_TRUE(mesh.restore(vertices));
+  BoundaryEstimationConfig off;
+  off.parallax_slope = 0;
+  EXPECT_EQ(holdBackYoungVertices(mesh, map, off), 0);
+  EXPECT_EQ(holdBackYoungVertices(mesh, map, BoundaryEstimationConfig{}), 1);
 }
 
 // A wall at (3, 20), 12 m high, seen by a camera driving north from y = -10 to -1; in one drive its
