@@ -11,11 +11,14 @@ namespace terrain {
 
 namespace {
 
-// mean colour of the few pixels above row `top` in column u looks like daylight sky
-bool skyAbove(const cv::Mat& rgb, int u, int top, const BoundaryEstimationConfig& cfg) {
+// mean colour of the few pixels above row `top` on the image of the vertical through px looks like
+// daylight sky
+bool skyAbove(const cv::Mat& rgb, const Verticals& verticals, const Pixel& px, int top,
+              const BoundaryEstimationConfig& cfg) {
   int r = 0, g = 0, b = 0, n = 0;
   for (int row = top - 6; row <= top - 3; ++row) {
-    if (row < 0) continue;
+    const int u = static_cast<int>(std::floor(verticals.columnAt(px, row + 0.5)));
+    if (row < 0 || u < 0 || u >= rgb.cols) continue;
     const auto& p = rgb.at<cv::Vec3b>(row, u);
     r += p[0], g += p[1], b += p[2], ++n;
   }
@@ -24,6 +27,51 @@ bool skyAbove(const cv::Mat& rgb, int u, int top, const BoundaryEstimationConfig
                        static_cast<std::uint8_t>(b / n));
   return looksLikeSky(mean, cfg.sky_blue_margin, cfg.sky_min_brightness);
 }
+
+// The topmost boundary pixel on the image of the vertical through each image position, found once
+// per line of the pencil through the vertical's vanishing point: the lines are indexed by the column
+// at which they cross a reference row (the image row farthest from the vanishing point).
+class TopsAlongVerticals {
+ public:
+  TopsAlongVerticals(const cv::Mat& boundary, const Verticals& verticals) : verticals_(verticals) {
+    if (boundary.empty() || boundary.type() != CV_8UC1) return;
+    const double vanish = verticals.vanishingRow();
+    ref_row_ = vanish < 0.5 * boundary.rows ? boundary.rows - 1 : 0;
+    // the lines through the image's corners bound those through the image
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const double u : {0.0, double(boundary.cols)}) {
+      for (const double v : {0.0, double(boundary.rows)}) {
+        const double c = verticals.columnAt(Pixel(u, v), ref_row_ + 0.5);
+        lo = std::min(lo, c), hi = std::max(hi, c);
+      }
+    }
+    // a pencil fanning out from a vanishing point inside the image: too many lines to walk
+    if (!(hi - lo <= 8.0 * boundary.cols)) return;
+    first_ = static_cast<int>(std::floor(lo)) - 1;
+    top_.assign(static_cast<std::size_t>(std::ceil(hi)) - first_ + 2, -1);
+    for (std::size_t l = 0; l < top_.size(); ++l) {
+      const Pixel at(first_ + static_cast<double>(l) + 0.5, ref_row_ + 0.5);
+      for (int row = 0; row < boundary.rows; ++row) {
+        const int u = static_cast<int>(std::floor(verticals.columnAt(at, row + 0.5)));
+        if (u >= 0 && u < boundary.cols && boundary.at<std::uint8_t>(row, u)) {
+          top_[l] = static_cast<std::int16_t>(row);
+          break;
+        }
+      }
+    }
+  }
+  bool empty() const { return top_.empty(); }
+  // the topmost boundary row on the vertical through px; -1 if none
+  int topAbove(const Pixel& px) const {
+    const double l = std::floor(verticals_.columnAt(px, ref_row_ + 0.5)) - first_;
+    return l >= 0 && l < static_cast<double>(top_.size()) ? top_[static_cast<std::size_t>(l)] : -1;
+  }
+
+ private:
+  Verticals verticals_;
+  int ref_row_ = 0, first_ = 0;
+  std::vector<std::int16_t> top_;
+};
 
 bool nonGround(const MeshVertex& m, const VoxelMap& map) {
   return map.voxels()[m.top_voxel].label == VoxelLabel::NonGround;
@@ -284,13 +332,15 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
                                            const BoundaryEstimationConfig& cfg, const cv::Mat& rgb,
                                            const SkylineOwners* given_owners) {
   BoundaryEstimationStats stats;
-  // the object's top above a vertex: the topmost boundary pixel of its column, found once per column
-  const std::vector<std::int16_t> tops_px = topBoundaryRows(boundary);
-  if (tops_px.empty()) return stats;
+  // the object's top above a vertex: the topmost boundary pixel on the image of the vertical through
+  // it, found once per line of the pencil
+  const Verticals verticals(k, world_from_camera);
+  const TopsAlongVerticals tops(boundary, verticals);
+  if (tops.empty()) return stats;
   const Pose camera_from_world = world_from_camera.inverse();
   const Point3 centre = world_from_camera.translation();
   const double cell = map.voxelSize();
-  const int cols = static_cast<int>(tops_px.size());
+  const int cols = boundary.cols;
   const bool sky_test = cfg.require_sky_above && rgb.type() == CV_8UC3 && rgb.cols == cols;
   auto& vertices = mesh.vertices();
   if (vertices.empty() || !centre.allFinite() || !(cfg.max_distance >= 0)) return stats;
@@ -304,8 +354,10 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const SkylineOwners* owners = cfg.clear_line ? in_view : nullptr;
   const FoliageObjects foliage =
       foliage_tops ? foliageObjects(in_view->objects(), mesh, map, cfg.foliage_margin) : FoliageObjects{};
-  const auto foliage_px = [&](int u, int row) {
-    return looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin);
+  // the pixel at `row` on the vertical through px is foliage
+  const auto foliage_px = [&](const Pixel& px, int row) {
+    const int u = static_cast<int>(std::floor(verticals.columnAt(px, row + 0.5)));
+    return u >= 0 && u < rgb.cols && looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin);
   };
   const auto [lo, hi] = cellsCovering(view, cell);
   mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
@@ -319,26 +371,27 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     const auto px = project(k, camera_from_world * world);
     if (!px) return;
     ++stats.projected;
-    // the object's top: the topmost boundary pixel in the column above the vertex
+    // the object's top: the topmost boundary pixel on the vertical above the vertex
     const int u = static_cast<int>(px->x()), v = static_cast<int>(px->y());
     if (u >= cols) return;
-    int top = tops_px[u];
+    int top = tops.topAbove(*px);
     // a crown the lidar saw part of: its top is where the foliage above the vertex ends
     const std::int32_t object = in_view ? in_view->objects().of[i] : -1;
-    const bool by_foliage = foliage_tops && object >= 0 && v < rgb.rows && foliage.leafy[object] && foliage_px(u, v) &&
-                            standsOverGround(m, map);
+    const bool by_foliage = foliage_tops && object >= 0 && v < rgb.rows && foliage.leafy[object] &&
+                            foliage_px(*px, v) && standsOverGround(m, map);
     if (by_foliage) {
       top = v;
-      while (top > 0 && foliage_px(u, top - 1)) --top;
+      while (top > 0 && foliage_px(*px, top - 1)) --top;
       if (top <= cfg.top_margin) return;
     } else {
       if (top < 0 || top > v || top <= cfg.top_margin) return;
-      if (sky_test && top < rgb.rows && !skyAbove(rgb, u, top, cfg)) {
+      if (sky_test && top < rgb.rows && !skyAbove(rgb, verticals, *px, top, cfg)) {
         ++stats.no_sky;
         return;
       }
     }
-    const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
+    // the ray through the top pixel's row where the vertical through the vertex crosses it
+    const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(*px, top + 0.5), top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
     if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) return;
     if (owners && owners->otherMayOwn(centre, dir, cfg.max_distance, object, Eigen::Vector2d(x, y), 1.0, 1.0,

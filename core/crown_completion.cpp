@@ -99,11 +99,14 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   auto crown = [&](int u, int row) {
     return foliage_cue ? looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin) : !sky(u, row);
   };
-  // where every trunk's top appears in the image (u < 0: not in the image)
+  // where every trunk's top appears in the image (u < 0: not in the image); the crown above it lies
+  // on the image of the vertical through it
   struct View {
     int u = -1, v = -1;
+    Pixel px = Pixel::Zero();
     double depth = 0;  // [m] along the optical axis
   };
+  const Verticals verticals(k, world_from_camera);
   const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, cfg.max_trunk_width);
   std::vector<View> views(trunks.size());
   // with the foliage cue, only another tree can own a crown's pixel: a building behind or before the
@@ -114,59 +117,74 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     const Point3 p = camera_from_world * Point3(trunks[i].centre.x(), trunks[i].centre.y(), trunks[i].top);
     const auto px = project(k, p);
     if (px && px->x() < rgb.cols && px->y() < rgb.rows)
-      views[i] = {static_cast<int>(px->x()), static_cast<int>(px->y()), p.z()};
+      views[i] = {static_cast<int>(px->x()), static_cast<int>(px->y()), *px, p.z()};
   }
+  // the column at `row` of the vertical through the top of trunk i (may lie outside the image)
+  const auto column = [&](std::size_t i, int row) {
+    return static_cast<int>(std::floor(verticals.columnAt(views[i].px, row + 0.5)));
+  };
+  const auto inside = [&](int u) { return u >= 0 && u < rgb.cols; };
   int measured = 0;
   for (std::size_t i = 0; i < trunks.size(); ++i) {
     const Trunk& t = trunks[i];
-    const int u = views[i].u, v = views[i].v;
-    if (u < 0) continue;
-    // the crown's rows in the trunk's column: [top, bottom]
+    const int v = views[i].v;
+    if (views[i].u < 0) continue;
+    // the crown's rows on the trunk's vertical: [top, bottom]
     int top = v, bottom = v - 1;
     if (foliage_cue) {
       // up the bare trunk (neither foliage nor sky) to the crown's lowest pixel, then up the crown
       const int gap = static_cast<int>(std::ceil(cfg.max_trunk_gap * k.fy / views[i].depth));
       int row = v;
-      while (row >= 0 && v - row <= gap && !crown(u, row) && !sky(u, row)) --row;
-      if (row < 0 || v - row > gap || !crown(u, row)) continue;  // no crown above the bare trunk
+      while (row >= 0 && v - row <= gap && inside(column(i, row)) && !crown(column(i, row), row) &&
+             !sky(column(i, row), row))
+        --row;
+      if (row < 0 || v - row > gap || !inside(column(i, row)) || !crown(column(i, row), row))
+        continue;  // no crown above the bare trunk
       bottom = row;
       top = row;
     }
-    while (top - 1 >= 0 && crown(u, top - 1)) --top;
+    while (top - 1 >= 0 && inside(column(i, top - 1)) && crown(column(i, top - 1), top - 1)) --top;
     // cut off by the image top, or too little crown
     if (top == 0 || bottom - top + 1 < cfg.min_height_px) continue;
-    // the crown's runs around the column, row by row down from the top, while the cue bounds them on
-    // both sides and neither end jumps outwards (something behind joining the crown): the widest, and
-    // the crown's half width as the largest distance from the column to the nearer end of a run (a
-    // crown beside it, joined on one side, does not widen it)
-    int widest = 0, prev_left = u, prev_right = u, widest_left = u, half = 0;
+    // the crown's runs around the vertical, row by row down from the top, while the cue bounds them
+    // on both sides and neither end jumps outwards (something behind joining the crown): the widest,
+    // and the crown's half width as the largest distance from the vertical to the nearer end of a
+    // run (a crown beside it, joined on one side, does not widen it)
+    int widest = 0, widest_left = 0, widest_row = top, half = 0;
+    int prev_left = column(i, top), prev_right = prev_left;
     for (int row = top; row <= bottom; ++row) {
+      const int u = column(i, row);
+      if (!inside(u)) break;
       int left = u, right = u;
       while (left - 1 >= 0 && crown(left - 1, row)) --left;
       while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
       if (left == 0 || right == rgb.cols - 1) break;
       const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
       if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
-      if (right - left + 1 > widest) widest = right - left + 1, widest_left = left;
+      if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
       half = std::max(half, std::min(u - left, right - u));
       prev_left = left, prev_right = right;
     }
     if (widest == 0) continue;
-    // a crown stands over its trunk: a widest run centred away from the trunk's column is another
+    // a crown stands over its trunk: a widest run centred away from the trunk's vertical is another
     // tree's crown, nearer or farther (the clear-line test knows only sensed objects, and crowns are
     // above the lidar's reach)
     const double run_centre = widest_left + 0.5 * (widest - 1);
-    if (std::abs(run_centre - u) > cfg.max_offcentre * widest + 1.0) continue;
+    const int own = column(i, widest_row);
+    if (std::abs(run_centre - own) > cfg.max_offcentre * widest + 1.0) continue;
     // of the trunks standing under the run (their tops below the crown's), the one nearest its
     // centre owns it
     bool nearer = false;
     for (std::size_t j = 0; j < trunks.size() && !nearer; ++j) {
-      nearer = j != i && views[j].u >= widest_left && views[j].u < widest_left + widest && views[j].v > top &&
-               std::abs(views[j].u - run_centre) < std::abs(u - run_centre);
+      if (j == i || views[j].u < 0) continue;
+      const int other = column(j, widest_row);
+      nearer = other >= widest_left && other < widest_left + widest && views[j].v > top &&
+               std::abs(other - run_centre) < std::abs(own - run_centre);
     }
     if (nearer) continue;
     const double radius = (half + 0.5) * views[i].depth / k.fx;
-    const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, top + 0.5));
+    const Vector3 dir =
+        world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, top + 0.5), top + 0.5));
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
     if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) continue;
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <limits>
 
 namespace terrain {
 namespace {
@@ -194,6 +195,72 @@ TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
     EXPECT_EQ(static_cast<int>(mesh.vertices()[a].estimates.size()), c.estimated)
         << "clear_line " << c.clear_line << ", B's top " << c.b_top;
   }
+}
+
+// a camera 1.6 m above the origin looking north, pitched up by `pitch` [rad]
+Pose pitchedNorthCamera(double pitch) {
+  Pose world_from_camera = Pose::Identity();
+  world_from_camera.linear().col(0) = Vector3(1, 0, 0);                               // x right = east
+  world_from_camera.linear().col(1) = Vector3(0, std::sin(pitch), -std::cos(pitch));  // y down
+  world_from_camera.linear().col(2) = Vector3(0, std::cos(pitch), std::sin(pitch));   // z forward
+  world_from_camera.translation() = Vector3(0, 0, 1.6);
+  return world_from_camera;
+}
+
+// The image of a vertical line is the line through the vertical's vanishing point: every point of
+// the vertical through (5, 20) projects onto it, for a pitched and a level camera (where it is the
+// column).
+TEST(BoundaryEstimationTest, VerticalsAreLinesThroughTheVanishingPoint) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  for (const double pitch : {0.0, 15 * M_PI / 180, -10 * M_PI / 180}) {
+    const Pose pose = pitchedNorthCamera(pitch);
+    const Verticals verticals(k, pose);
+    const auto px = [&](double z) { return *project(k, pose.inverse() * Point3(5, 20, z)); };
+    const Pixel base = px(1.0);
+    for (const double z : {0.0, 4.0, 8.0, 12.0}) {
+      const Pixel p = px(z);
+      EXPECT_NEAR(verticals.columnAt(base, p.y()), p.x(), 1e-9) << pitch << " " << z;
+    }
+    if (pitch == 0) {
+      EXPECT_EQ(verticals.columnAt(base, 0.0), base.x());
+      EXPECT_EQ(verticals.vanishingRow(), -std::numeric_limits<double>::infinity());
+    } else {
+      // 312.8 px / tan(pitch) above the image centre for a camera pitched up, below for one pitched down
+      EXPECT_NEAR(verticals.vanishingRow(), k.cy - k.fy / std::tan(pitch), 1e-6);
+    }
+  }
+}
+
+// A wall from x = 4 to 6 m at y = 20, 12 m high, seen by a camera pitched up 15 degrees. Above its
+// vertex at x = 5.9 the image column drifts right of the vertical (which leans towards the
+// vanishing point above the image centre) and passes beyond the wall's end, where there is no top
+// edge; along the vertical the stage finds the wall's top and gives its height.
+TEST(BoundaryEstimationTest, TheTopIsSearchedAlongTheVerticalNotTheColumn) {
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
+  const Pose pose = pitchedNorthCamera(15 * M_PI / 180);
+  const Pose camera_from_world = pose.inverse();
+  // the wall's top edge, one pixel wide, with sky above it
+  cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
+  for (double x = 4.0; x <= 6.0; x += 0.005) {
+    const Pixel p = *project(k, camera_from_world * Point3(x, 20.0, 12.0));
+    boundary.at<std::uint8_t>(static_cast<int>(p.y()), static_cast<int>(p.x())) = 255;
+  }
+  VoxelMap map(VoxelMapConfig{0.2});
+  map.insert({Point3(5.9, 20.05, 1.05)}, 0);
+  map.voxels()[0].label = VoxelLabel::NonGround;
+  TerrainMesh mesh;
+  mesh.update(map, map.takeNewVoxels());
+  const Pixel vertex = *project(k, camera_from_world * Point3(5.9, 20.1, 1.1));
+  const Pixel top = *project(k, camera_from_world * Point3(5.9, 20.1, 12.0));
+  // the column above the vertex holds no edge pixel: it leaves the wall 0.7 m past its end
+  ASSERT_GT(vertex.x() - top.x(), 10.0);
+  EXPECT_EQ(cv::countNonZero(boundary.col(static_cast<int>(vertex.x()))), 0);
+  BoundaryEstimationConfig cfg;
+  cfg.clear_line = false;
+  const auto stats = estimateBoundaries(mesh, map, boundary, k, pose, cfg);
+  ASSERT_EQ(stats.estimated, 1);
+  // within a pixel of the edge: about 6 cm at 20 m
+  EXPECT_NEAR(mesh.vertices()[0].height(), 12.0, 0.1);
 }
 
 // A crown the lidar saw the underside of, at (3, 20), 3 m up and topped at 6 m, seen from the origin
