@@ -512,10 +512,14 @@ class TileLayout {
     first_.push_back(0);
     for (std::size_t t = 0; t < tiles.size(); ++t) {
       setTile(gridCell(tiles[t].tx, tiles[t].ty), t);
-      ids_.insert(ids_.end(), ids[t]->begin(), ids[t]->end());
-      first_.push_back(static_cast<std::uint32_t>(ids_.size()));
+      first_.push_back(first_.back() + static_cast<std::uint32_t>(ids[t]->size()));
     }
-    sortColumns(voxels);
+    resizePositions(first_.back());
+    tbb::parallel_for(std::size_t{0}, tiles.size(), [&](std::size_t t) {
+      std::uint32_t q = first_[t];
+      for (std::uint32_t i : *ids[t]) place(q++, i, voxels[i], tiles[t]);
+    });
+    sortColumns();
   }
 
   int k() const { return k_; }
@@ -637,14 +641,17 @@ class TileLayout {
       tiles_.push_back({static_cast<int>(cell % nx_) + gx0_, static_cast<int>(cell / nx_) + gy0_});
       first_.push_back(start);
     }
-    ids_.resize(n);
+    // each voxel placed with what sortColumns needs of it, read here in id order
+    resizePositions(n);
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
       std::uint32_t* fill = offset.data() + c * cells;
-      for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i)
-        ids_[fill[gridCell(tile_of_[i].tx, tile_of_[i].ty)]++] = static_cast<std::uint32_t>(i);
+      for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
+        const Tile t = tile_of_[i];
+        place(fill[gridCell(t.tx, t.ty)]++, static_cast<std::uint32_t>(i), voxels[i], t);
+      }
     });
     first_.push_back(static_cast<std::uint32_t>(n));
-    sortColumns(voxels);
+    sortColumns();
   }
 
   // the same, in the same tile order, by sorting the voxels' grid cells: for maps whose extent
@@ -656,9 +663,10 @@ class TileLayout {
       keyed[i] = {gridCell(tile_of_[i].tx, tile_of_[i].ty), static_cast<std::uint32_t>(i)};
     });
     std::sort(keyed.begin(), keyed.end());
-    ids_.resize(n);
+    resizePositions(n);
     for (std::size_t j = 0; j < n; ++j) {
-      ids_[j] = keyed[j].second;
+      const std::uint32_t i = keyed[j].second;
+      place(j, i, voxels[i], tile_of_[i]);
       if (j > 0 && keyed[j].first == keyed[j - 1].first) continue;
       const std::uint64_t c = keyed[j].first;
       setTile(c, tiles_.size());
@@ -666,7 +674,7 @@ class TileLayout {
       first_.push_back(static_cast<std::uint32_t>(j));
     }
     first_.push_back(static_cast<std::uint32_t>(n));
-    sortColumns(voxels);
+    sortColumns();
   }
 
   // the tile grid over [x0, x1] x [y0, y1]: dense unless it would hold far more cells than the
@@ -689,42 +697,51 @@ class TileLayout {
     }
   }
 
-  // orders each tile's voxels (positions first_[t] .. first_[t + 1]) by column and z
-  void sortColumns(const std::vector<Voxel>& voxels) {
+  void resizePositions(std::size_t n) {
+    ids_.resize(n), z_.resize(n), height_.resize(n), local_.resize(n);
+  }
+  // puts voxel i, of tile t, at position q
+  void place(std::size_t q, std::uint32_t i, const Voxel& v, const Tile& t) {
+    ids_[q] = i;
+    z_[q] = v.index.z();
+    height_[q] = v.height;
+    local_[q] = static_cast<std::uint32_t>((v.index.y() - t.ty * k_) * k_ + (v.index.x() - t.tx * k_));
+  }
+
+  // orders each tile's positions (first_[t] .. first_[t + 1], placed) by column and z: a counting
+  // sort by column, then an insertion sort by z inside each column (a column holds few voxels)
+  void sortColumns() {
     const std::vector<std::uint32_t>& first = first_;
     const std::size_t kk = static_cast<std::size_t>(k_) * k_;
     columns_.resize(tiles_.size() * (kk + 1));
-    z_.resize(ids_.size());
-    height_.resize(ids_.size());
     range_.resize(2 * tiles_.size());
     tbb::parallel_for(std::size_t{0}, tiles_.size(), [&](std::size_t t) {
-      const int cx = tiles_[t].tx * k_, cy = tiles_[t].ty * k_;
+      thread_local std::vector<std::uint32_t> fill, id;
+      thread_local std::vector<std::int32_t> zs;
+      thread_local std::vector<float> hs;
+      const std::uint32_t b = first[t], e = first[t + 1];
       std::uint32_t* col = columns_.data() + t * (kk + 1);
       std::fill(col, col + kk + 1, 0);
-      const std::vector<std::uint32_t> in(ids_.begin() + first[t], ids_.begin() + first[t + 1]);
-      auto local = [&](std::uint32_t i) {
-        return static_cast<std::size_t>(voxels[i].index.y() - cy) * k_ +
-               static_cast<std::size_t>(voxels[i].index.x() - cx);
-      };
-      for (std::uint32_t i : in) ++col[local(i) + 1];
-      col[0] = first[t];
+      for (std::uint32_t q = b; q < e; ++q) ++col[local_[q] + 1];
+      col[0] = b;
       for (std::size_t c = 0; c < kk; ++c) col[c + 1] += col[c];
-      std::vector<std::uint32_t> fill(col, col + kk);
-      for (std::uint32_t i : in) ids_[fill[local(i)]++] = i;
-      for (std::size_t c = 0; c < kk; ++c) {
-        // insertion sort by z: a column holds few voxels
-        for (std::uint32_t q = col[c] + 1; q < col[c + 1]; ++q) {
-          const std::uint32_t i = ids_[q];
-          std::uint32_t r = q;
-          for (; r > col[c] && voxels[ids_[r - 1]].index.z() > voxels[i].index.z(); --r) ids_[r] = ids_[r - 1];
-          ids_[r] = i;
-        }
+      fill.assign(col, col + kk);
+      id.resize(e - b), zs.resize(e - b), hs.resize(e - b);
+      for (std::uint32_t q = b; q < e; ++q) {
+        const std::uint32_t r = fill[local_[q]]++ - b;
+        id[r] = ids_[q], zs[r] = z_[q], hs[r] = height_[q];
       }
       float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-      for (std::uint32_t q = first[t]; q < first[t + 1]; ++q) {
-        z_[q] = voxels[ids_[q]].index.z();
-        height_[q] = voxels[ids_[q]].height;
-        lo = std::min(lo, height_[q]), hi = std::max(hi, height_[q]);
+      for (std::size_t c = 0; c < kk; ++c) {
+        for (std::uint32_t q = col[c]; q < col[c + 1]; ++q) {
+          const std::uint32_t i = id[q - b];
+          const std::int32_t z = zs[q - b];
+          const float h = hs[q - b];
+          std::uint32_t r = q;
+          for (; r > col[c] && z_[r - 1] > z; --r) ids_[r] = ids_[r - 1], z_[r] = z_[r - 1], height_[r] = height_[r - 1];
+          ids_[r] = i, z_[r] = z, height_[r] = h;
+          lo = std::min(lo, h), hi = std::max(hi, h);
+        }
       }
       range_[2 * t] = lo, range_[2 * t + 1] = hi;
     });
@@ -754,6 +771,7 @@ class TileLayout {
   std::vector<std::uint32_t> ids_;      // voxel id per position
   std::vector<std::int32_t> z_;         // voxel z index per position
   std::vector<float> height_;           // voxel height per position [m]
+  std::vector<std::uint32_t> local_;    // voxel column in its tile per position (while grouping)
   std::vector<float> range_;            // per tile: its lowest and highest voxel height [m]
   std::vector<std::uint32_t> first_;    // per tile and one past the last: its first position
   std::vector<Tile> tile_of_;           // per voxel: its tile (while grouping)
@@ -1132,10 +1150,10 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
     layout.linkNeighbours(p, cfg, count);
     refine(ws, cfg, out);
     out.tiles = static_cast<int>(st.tiles.size());
-    for (std::size_t q = 0; q < m; ++q) {
+    tbb::parallel_for(std::size_t{0}, m, [&](std::size_t q) {
       out.refined[layout.id(q)] = ws.labels[q];
       voxels[layout.id(q)].label = ws.labels[q] ? VoxelLabel::Ground : VoxelLabel::NonGround;
-    }
+    });
   });
 }
 
