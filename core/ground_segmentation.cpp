@@ -819,6 +819,7 @@ struct Workspace {
   std::vector<Plane> planes;                // per tile segmented
   GmrfProblem problem;                      // over the positions of the tiles segmented
   std::vector<std::uint8_t> rough, labels;  // per position: rough and refined labels
+  MinCutSolver mincut;                      // with its flow graph
 };
 
 // The ground planes of tiles 0 .. count - 1 of the workspace's layout (h1 as a function of
@@ -893,7 +894,7 @@ void refine(Workspace& ws, const GroundSegmentationConfig& cfg, SegmentationResu
   ws.labels = ws.rough;
   if (cfg.solver == GroundSegmentationConfig::Solver::MinCut) {
     out.energy_rough = gmrfEnergy(ws.problem, ws.rough);
-    solveMinCut(ws.problem, ws.labels);
+    ws.mincut.solve(ws.problem, ws.labels);
     out.energy_refined = gmrfEnergy(ws.problem, ws.labels);
     out.iterations = 0;
   } else {

@@ -110,6 +110,20 @@ struct IcmResult {
 IcmResult solveIcm(const GmrfProblem& problem, std::vector<std::uint8_t>& ground, int max_iterations, int threads);
 // Exact minimum by s-t min-cut.
 void solveMinCut(const GmrfProblem& problem, std::vector<std::uint8_t>& ground);
+// The same, keeping the flow graph's memory from one call to the next (about 220 bytes per node of
+// a grid problem): a map re-segmented as it grows pays for those pages once, not on every call.
+class MinCutSolver {
+ public:
+  MinCutSolver();
+  ~MinCutSolver();
+  MinCutSolver(const MinCutSolver&) = delete;
+  MinCutSolver& operator=(const MinCutSolver&) = delete;
+  void solve(const GmrfProblem& problem, std::vector<std::uint8_t>& ground);
+
+ private:
+  struct Graph;
+  std::unique_ptr<Graph> graph_;
+};
 
 struct SegmentationResult {
   std::vector<std::uint8_t> rough;    // per voxel: 1 if in G1

@@ -4,15 +4,30 @@
 #include <maxflow/graph.h>
 
 #include <algorithm>
+#include <memory>
 
 namespace terrain {
 
-void solveMinCut(const GmrfProblem& p, std::vector<std::uint8_t>& ground) {
-  using Graph = maxflow::Graph<double, double, double>;
+struct MinCutSolver::Graph {
+  maxflow::Graph<double, double, double> g;
+  Graph(int nodes, int edges) : g(nodes, edges) {}
+};
+
+MinCutSolver::MinCutSolver() = default;
+MinCutSolver::~MinCutSolver() = default;
+
+void MinCutSolver::solve(const GmrfProblem& p, std::vector<std::uint8_t>& ground) {
+  using Flow = maxflow::Graph<double, double, double>;
   const int n = static_cast<int>(ground.size());
   int pairs = 0;
   for (std::uint32_t u : p.next) pairs += u != GmrfProblem::kNone;
-  Graph g(n, pairs);
+  // the graph keeps its arrays on reset (and grows them as nodes and edges are added)
+  if (graph_) {
+    graph_->g.reset();
+  } else {
+    graph_ = std::make_unique<Graph>(n, pairs);
+  }
+  Flow& g = graph_->g;
   g.add_node(n);
   // source side = ground. A node on the source side cuts its sink link, so the sink capacity is
   // the cost of "ground"; shifting both costs by their minimum keeps capacities non-negative.
@@ -29,7 +44,9 @@ void solveMinCut(const GmrfProblem& p, std::vector<std::uint8_t>& ground) {
     }
   }
   g.maxflow();
-  for (int v = 0; v < n; ++v) ground[v] = g.what_segment(v) == Graph::SOURCE ? 1 : 0;
+  for (int v = 0; v < n; ++v) ground[v] = g.what_segment(v) == Flow::SOURCE ? 1 : 0;
 }
+
+void solveMinCut(const GmrfProblem& p, std::vector<std::uint8_t>& ground) { MinCutSolver().solve(p, ground); }
 
 }  // namespace terrain

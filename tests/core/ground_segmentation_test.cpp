@@ -118,6 +118,28 @@ TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {
   }
 }
 
+// one solver, its graph kept from call to call, on problems that grow and shrink: the labels of a
+// fresh solve every time, and the exact minimum on those small enough to enumerate
+TEST(GroundSegmentationTest, AReusedMinCutSolverGivesTheLabelsOfAFreshOne) {
+  MinCutSolver solver;
+  for (const int n : {14, 3000, 12, 20000, 500}) {
+    const GmrfProblem p = randomProblem(n, 100 + n);
+    std::vector<std::uint8_t> reused(n, 0), fresh(n, 0);
+    solver.solve(p, reused);
+    solveMinCut(p, fresh);
+    EXPECT_EQ(reused, fresh) << n;
+    if (n <= 14) {
+      double best = 1e18;
+      std::vector<std::uint8_t> l(n);
+      for (int mask = 0; mask < (1 << n); ++mask) {
+        for (int i = 0; i < n; ++i) l[i] = (mask >> i) & 1;
+        best = std::min(best, gmrfEnergy(p, l));
+      }
+      EXPECT_NEAR(gmrfEnergy(p, reused), best, 1e-9) << n;
+    }
+  }
+}
+
 TEST(GroundSegmentationTest, PairWeightFollowsTheExponentialOfTheHeightDifference) {
   GroundSegmentationConfig cfg;
   cfg.beta = 0, cfg.gamma = 2.0;
