@@ -92,8 +92,18 @@ double rayHfield(const mjModel* m, const mjData* d, int id, const mjtNum pnt[3],
   while (true) {
     // a hit nearer than this cell's entry cannot be improved on by this or later cells
     if (x >= 0 && x < cell_entry - 1e-9) break;
-    // test this cell and its neighbours across the edges the ray runs close to
-    for (int rr = std::max(0, r - 1); rr <= std::min(nrow - 2, r + 1); ++rr) {
+    const double cell_exit = std::min(next_c, next_r);
+    // test this cell and its neighbours across the edges the ray runs close to, unless the ray
+    // stays above all of their vertices while it passes over this cell (a lidar ray over terrain,
+    // nearly every cell it passes)
+    const double z_low = lp[2] + std::min(cell_entry * lv[2], std::min(cell_exit, t_out) * lv[2]);
+    float top = -std::numeric_limits<float>::infinity();
+    const int r0 = std::max(0, r - 1), r1 = std::min(nrow - 1, r + 2), c0 = std::max(0, c - 1), c1 = std::min(ncol - 1, c + 2);
+    for (int rr = r0; rr <= r1; ++rr) {
+      for (int cc = c0; cc <= c1; ++cc) top = std::max(top, data[rr * ncol + cc]);
+    }
+    const bool above = z_low > top * size[2] + 1e-9 * (1.0 + size[2]);
+    for (int rr = std::max(0, r - 1); !above && rr <= std::min(nrow - 2, r + 1); ++rr) {
       for (int cc = std::max(0, c - 1); cc <= std::min(ncol - 2, c + 1); ++cc) {
         if (rr != r && cc != c) continue;
         double v00[3], v11[3], v01[3], v10[3];
@@ -107,7 +117,6 @@ double rayHfield(const mjModel* m, const mjData* d, int id, const mjtNum pnt[3],
         }
       }
     }
-    const double cell_exit = std::min(next_c, next_r);
     if (cell_exit >= t_out) break;
     if (next_c < next_r) {
       c += step_c;

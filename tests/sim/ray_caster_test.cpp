@@ -112,5 +112,58 @@ TEST(HfieldRayTest, MatchesMjRayHfieldOnRoughAndSlopedTerrain) {
   }
 }
 
+// rays aimed at the grid's vertices and at points of its cells' edges, at the surface's height
+// there and a hair off them (0.1 um to 0.1 mm: exactly on an edge, rounding decides which of the
+// triangles that share it, if any, is hit, for MuJoCo as for the walk): hits at the height of the
+// highest vertex of the cells around them, which the walk skips when the ray passes above all of
+// those vertices
+TEST(HfieldRayTest, MatchesMjRayHfieldNextToVerticesAndEdges) {
+  test::TempDir dir;
+  scenes::SceneConfig cfg;
+  cfg.type = "rough";
+  cfg.seed = 4;
+  cfg.extent = 30;
+  cfg.hfield_cell = 0.5;
+  scenes::writeScene(scenes::generateScene(cfg), dir / "rough.xml", false);
+  const World world(dir / "rough.xml");
+  const mjModel* m = world.model();
+  const mjData* d = world.data();
+  const int g = world.terrainGeom(), h = m->geom_dataid[g];
+  const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
+  const mjtNum* size = m->hfield_size + 4 * h;
+  const float* data = m->hfield_data + m->hfield_adr[h];
+  const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> mat(d->geom_xmat + 9 * g);
+  const Eigen::Map<const Vector3> pos(d->geom_xpos + 3 * g);
+  // the world position of grid vertex (r, c), or of a point a share s along the edge to (r, c + 1)
+  const auto at = [&](int r, int c, double s) {
+    const double dx = 2 * size[0] / (ncol - 1), dy = 2 * size[1] / (nrow - 1);
+    const double z = (1 - s) * data[r * ncol + c] + s * data[r * ncol + c + 1];
+    return Vector3(pos + mat * Vector3(dx * (c + s) - size[0], dy * r - size[1], z * size[2]));
+  };
+  Random rng(23);
+  int hits = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const int r = static_cast<int>(rng.uniform(2, nrow - 3)), c = static_cast<int>(rng.uniform(2, ncol - 3));
+    const double off = std::pow(10.0, rng.uniform(-7, -4));
+    const double dir_off = rng.uniform(0, 2 * M_PI);
+    const Vector3 target = at(r, c, i % 2 == 0 ? 0.0 : rng.uniform(0.01, 0.99)) +
+                           off * Vector3(std::cos(dir_off), std::sin(dir_off), rng.uniform(-1, 1));
+    // from 5 to 40 m away, 0.2 to 6 m above the target: grazing to steep
+    const double az = rng.uniform(0, 2 * M_PI), range = rng.uniform(5, 40);
+    const Vector3 p = target + Vector3(range * std::cos(az), range * std::sin(az), rng.uniform(0.2, 6.0));
+    const Vector3 v = (target - p).normalized();
+    const mjtNum pnt[3] = {p.x(), p.y(), p.z()}, vec[3] = {v.x(), v.y(), v.z()};
+    const double ref = mj_rayHfield(m, d, g, pnt, vec);
+    const double fast = rayHfield(m, d, g, pnt, vec);
+    ASSERT_EQ(ref < 0, fast < 0) << "ray " << i << ": " << ref << " vs " << fast;
+    if (ref >= 0) {
+      ASSERT_NEAR(fast, ref, 1e-6) << "ray " << i;
+      hits += std::abs(ref - (target - p).norm()) < 1e-3;
+    }
+  }
+  // most rays end next to their target
+  EXPECT_GT(hits, 2000);
+}
+
 }  // namespace
 }  // namespace terrain::sim
