@@ -4,6 +4,8 @@
 #include "evaluation/metrics.hpp"
 #include "rig/kitti.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <chrono>
 
 namespace terrain::eval {
@@ -16,10 +18,10 @@ namespace {
 std::vector<std::uint8_t> pointLabels(const VoxelMap& map, const std::vector<Point3>& points,
                                       const std::vector<std::uint8_t>& voxel_labels) {
   std::vector<std::uint8_t> out(points.size(), 0);
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
     const std::int64_t v = map.find(map.indexOf(points[i]));
     if (v >= 0) out[i] = voxel_labels[v];
-  }
+  });
   return out;
 }
 
