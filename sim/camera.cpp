@@ -4,7 +4,9 @@
 
 #include <GL/osmesa.h>
 
+#include <algorithm>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 namespace terrain::sim {
@@ -76,16 +78,45 @@ CameraRender CameraRenderer::render(const Pose& world_from_camera) {
     for (int j = 0; j < 3; ++j) data_->cam_xmat[9 * camera_ + 3 * i + j] = mj(i, j);
   }
   const mjrRect viewport{0, 0, w, h};
-  mjv_updateScene(model_, data_, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &gl_->scene);
+  mjvScene& scene = gl_->scene;
+  mjv_updateScene(model_, data_, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &scene);
   // mjv_updateScene recomputes nothing of the camera pose: it reads cam_xpos / cam_xmat
-  CameraRender out;
-  std::vector<unsigned char> rgb(static_cast<std::size_t>(w) * h * 3);
-  std::vector<float> depth(static_cast<std::size_t>(w) * h);
-  gl_->scene.flags[mjRND_SEGMENT] = 0;
-  gl_->scene.flags[mjRND_IDCOLOR] = 0;
-  mjr_render(viewport, &gl_->scene, &gl_->render);
+  //
+  // The terrain's heightfield (a hundred thousand cells) costs most of a frame, so it is drawn
+  // once. The first pass draws every geom without the skybox: a pixel it leaves at the far plane
+  // saw the sky, which a pass of the skybox alone then colours. The segmentation pass draws every
+  // geom but the terrain in the colour of its segmentation id + 1: a pixel whose nearest such geom
+  // lies behind what the first pass saw there (or that has none) saw the terrain. Geoms drawn in
+  // both passes rasterise to the same depths. With one pass of each kind instead (the terrain in
+  // both, the skybox in the first), the images are the same.
+  int terrain = -1, heightfields = 0;
+  for (int i = 0; i < scene.ngeom; ++i) {
+    if (scene.geoms[i].type == mjGEOM_HFIELD) terrain = i, ++heightfields;
+  }
+  const bool once = heightfields == 1 && !segmentation_pass_with_terrain_;
+  const std::size_t pixels = static_cast<std::size_t>(w) * h;
+  std::vector<unsigned char> rgb(pixels * 3);
+  std::vector<float> depth(pixels);
+  scene.flags[mjRND_SEGMENT] = 0;
+  scene.flags[mjRND_IDCOLOR] = 0;
+  const mjtByte skybox = scene.flags[mjRND_SKYBOX];
+  if (once) scene.flags[mjRND_SKYBOX] = 0;
+  mjr_render(viewport, &scene, &gl_->render);
   mjr_readPixels(rgb.data(), depth.data(), viewport, &gl_->render);
+  scene.flags[mjRND_SKYBOX] = skybox;
+  if (once && skybox && std::any_of(depth.begin(), depth.end(), [](float d) { return d >= 1.0f; })) {
+    std::vector<unsigned char> sky(pixels * 3);
+    const int ngeom = scene.ngeom;
+    scene.ngeom = 0;
+    mjr_render(viewport, &scene, &gl_->render);
+    mjr_readPixels(sky.data(), nullptr, viewport, &gl_->render);
+    scene.ngeom = ngeom;
+    for (std::size_t i = 0; i < pixels; ++i) {
+      if (depth[i] >= 1.0f) std::memcpy(&rgb[3 * i], &sky[3 * i], 3);
+    }
+  }
   // OpenGL rows run bottom-up
+  CameraRender out;
   out.rgb.create(h, w, CV_8UC3);
   out.depth.create(h, w, CV_32FC1);
   const double extent = model_->stat.extent;
@@ -100,23 +131,43 @@ CameraRender CameraRenderer::render(const Pose& world_from_camera) {
       dst[x] = d >= 1.0 ? 0.0f : static_cast<float>(znear * zfar / (zfar - d * (zfar - znear)));
     }
   }
-  // segmentation: each geom drawn in the colour segid + 1
-  gl_->scene.flags[mjRND_SEGMENT] = 1;
-  gl_->scene.flags[mjRND_IDCOLOR] = 1;
-  mjr_render(viewport, &gl_->scene, &gl_->render);
-  mjr_readPixels(rgb.data(), nullptr, viewport, &gl_->render);
-  gl_->scene.flags[mjRND_SEGMENT] = 0;
-  gl_->scene.flags[mjRND_IDCOLOR] = 0;
+  // the value of each segmentation id: its geom's id + 1, 0 for what is not a model geom
+  std::vector<std::uint16_t> value_of(static_cast<std::size_t>(scene.ngeom), 0);
+  for (int i = 0; i < scene.ngeom; ++i) {
+    const mjvGeom& g = scene.geoms[i];
+    if (g.segid >= 0 && g.segid < scene.ngeom && g.objtype == mjOBJ_GEOM && g.objid >= 0)
+      value_of[g.segid] = static_cast<std::uint16_t>(g.objid + 1);
+  }
+  std::uint16_t terrain_value = 0;
+  if (once) {
+    const mjvGeom& g = scene.geoms[terrain];
+    if (g.objtype == mjOBJ_GEOM && g.objid >= 0) terrain_value = static_cast<std::uint16_t>(g.objid + 1);
+    std::swap(scene.geoms[terrain], scene.geoms[scene.ngeom - 1]);
+    --scene.ngeom;
+  }
+  std::vector<float> depth_objects(once ? pixels : 0);
+  scene.flags[mjRND_SEGMENT] = 1;
+  scene.flags[mjRND_IDCOLOR] = 1;
+  mjr_render(viewport, &scene, &gl_->render);
+  mjr_readPixels(rgb.data(), once ? depth_objects.data() : nullptr, viewport, &gl_->render);
+  scene.flags[mjRND_SEGMENT] = 0;
+  scene.flags[mjRND_IDCOLOR] = 0;
+  if (once) {
+    ++scene.ngeom;
+    std::swap(scene.geoms[terrain], scene.geoms[scene.ngeom - 1]);
+  }
   out.segmentation.create(h, w, CV_16UC1);
   for (int y = 0; y < h; ++y) {
-    const unsigned char* src = rgb.data() + static_cast<std::size_t>(h - 1 - y) * w * 3;
+    const std::size_t row = static_cast<std::size_t>(h - 1 - y) * w;
+    const unsigned char* src = rgb.data() + row * 3;
     auto* dst = out.segmentation.ptr<std::uint16_t>(y);
     for (int x = 0; x < w; ++x) {
       const int segid = (src[3 * x] | (src[3 * x + 1] << 8) | (src[3 * x + 2] << 16)) - 1;
       std::uint16_t value = 0;
-      if (segid >= 0 && segid < gl_->scene.ngeom) {
-        const mjvGeom& g = gl_->scene.geoms[segid];
-        if (g.objtype == mjOBJ_GEOM && g.objid >= 0) value = static_cast<std::uint16_t>(g.objid + 1);
+      if (once && (segid < 0 || depth_objects[row + x] > depth[row + x])) {
+        value = depth[row + x] < 1.0f ? terrain_value : 0;
+      } else if (segid >= 0 && segid < static_cast<int>(value_of.size())) {
+        value = value_of[segid];
       }
       dst[x] = value;
     }

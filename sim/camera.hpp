@@ -14,7 +14,7 @@ namespace terrain::sim {
 
 struct CameraRender {
   cv::Mat rgb;           // CV_8UC3, RGB, row 0 at the top
-  cv::Mat depth;         // CV_32FC1 [m] along the optical axis, 0 where nothing was drawn
+  cv::Mat depth;         // CV_32FC1 [m] along the optical axis, 0 for sky
   cv::Mat segmentation;  // CV_16UC1 geom id + 1, 0 for sky
 };
 
@@ -32,10 +32,15 @@ class CameraRenderer {
 
   CameraIntrinsics intrinsics() const;
 
+  // Renders with the straightforward passes instead: the skybox in the first, the terrain in the
+  // segmentation pass too (slower; the same images, kept as the reference they are tested against).
+  void setSegmentationPassWithTerrain(bool on) { segmentation_pass_with_terrain_ = on; }
+
  private:
   struct Gl;
   const World& world_;
   CameraConfig config_;
+  bool segmentation_pass_with_terrain_ = false;
   mjModel* model_ = nullptr;  // own copy: fovy and buffer size follow the config
   mjData* data_ = nullptr;
   int camera_ = -1;

@@ -275,6 +275,55 @@ TEST(SimulatedRigTest, CrownsLookLikeFoliageFromEverySide) {
   EXPECT_GT(static_cast<double>(foliage) / crown, 0.995) << foliage << " of " << crown << " crown pixels";
 }
 
+// The renderer draws the terrain once per frame (left out of the segmentation pass, which takes
+// the terrain's pixels from the first pass's depth) and the skybox in a pass of its own. Views
+// along the drive, turning all round, give the images of the straightforward passes: the RGB and
+// segmentation alike pixel for pixel, the depth alike wherever something was drawn, and 0 for sky.
+TEST(SimulatedRigTest, TerrainDrawnOnceGivesTheImagesOfFullPasses) {
+  test::TempDir dir;
+  auto world = generatedWorld(dir, "urban", 1);
+  CameraRenderer fast(*world, smallCamera().camera), full(*world, smallCamera().camera);
+  full.setSegmentationPassWithTerrain(true);
+  const auto& path = world->truth().path;
+  long terrain = 0, sky = 0, objects = 0;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    for (int turn = 0; turn < 4; ++turn) {
+      const double a = turn * M_PI / 2 + 0.3 * i;
+      Pose world_from_camera = Pose::Identity();
+      world_from_camera.linear().col(0) = Vector3(std::sin(a), -std::cos(a), 0);
+      world_from_camera.linear().col(1) = Vector3(0, 0, -1);
+      world_from_camera.linear().col(2) = Vector3(std::cos(a), std::sin(a), 0);
+      world_from_camera.translation() =
+          Vector3(path[i].x(), path[i].y(), world->terrainHeight(path[i].x(), path[i].y()) + 1.6);
+      const CameraRender a1 = fast.render(world_from_camera), a2 = full.render(world_from_camera);
+      long rgb = 0, seg = 0, depth = 0;
+      for (int v = 0; v < a1.rgb.rows; ++v) {
+        for (int u = 0; u < a1.rgb.cols; ++u) {
+          const int id = a2.segmentation.at<std::uint16_t>(v, u);
+          rgb += a1.rgb.at<cv::Vec3b>(v, u) != a2.rgb.at<cv::Vec3b>(v, u);
+          seg += a1.segmentation.at<std::uint16_t>(v, u) != id;
+          const float d = a1.depth.at<float>(v, u);
+          depth += id == 0 ? d != 0.0f : d != a2.depth.at<float>(v, u);
+          if (id == 0) {
+            ++sky;
+          } else if (world->geomClass(id - 1) == scenes::GeomClass::Ground) {
+            ++terrain;
+          } else {
+            ++objects;
+          }
+        }
+      }
+      EXPECT_EQ(rgb, 0) << "view " << i << "/" << turn << ": RGB pixels that differ";
+      EXPECT_EQ(seg, 0) << "view " << i << "/" << turn << ": segmentation pixels that differ";
+      EXPECT_EQ(depth, 0) << "view " << i << "/" << turn << ": depth pixels that differ";
+    }
+  }
+  // the views hold all three kinds of pixel
+  EXPECT_GT(terrain, 10000);
+  EXPECT_GT(sky, 10000);
+  EXPECT_GT(objects, 1000);
+}
+
 TEST(SimulatedRigTest, RefusesOutOfRangeSettingsWithTheAllowedRange) {
   auto world = test::wallWorld(10.0);
   auto expectRefused = [&](SimConfig c, const std::string& field) {
