@@ -296,26 +296,6 @@ struct Plane {
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 int floorMod(int a, int b) { return a - floorDiv(a, b) * b; }
 
-// floor(a / k) for one k > 0 and any int a, by a multiplication: the layout divides every voxel's
-// x and y by the tile's width, and a division costs several times as much. a is shifted by a
-// multiple of k to make it non-negative, the quotient taken in double precision (off by at most
-// one: a shifted a is below 2^33) and corrected.
-class FloorDivider {
- public:
-  explicit FloorDivider(int k) : k_(k), inv_(1.0 / k), shift_(((std::int64_t{1} << 31) / k + 1)), bias_(shift_ * k) {}
-  int operator()(int a) const {
-    const std::int64_t u = a + bias_;
-    std::int64_t q = static_cast<std::int64_t>(static_cast<double>(u) * inv_);
-    q -= q * k_ > u;
-    q += (q + 1) * k_ <= u;
-    return static_cast<int>(q - shift_);
-  }
-
- private:
-  std::int64_t k_;
-  double inv_;
-  std::int64_t shift_, bias_;
-};
 
 // sums of a point set, relative to a reference point near it, for least squares in one pass
 struct Moments {
@@ -498,11 +478,10 @@ class TileLayout {
     tile_of_.resize(n);
     std::vector<std::array<int, 4>> extent(kChunks, {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
                                                      std::numeric_limits<int>::min(), std::numeric_limits<int>::min()});
-    const FloorDivider div(k);
     tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
       auto [x0, y0, x1, y1] = extent[c];
       for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
-        const Tile t{div(voxels[i].index.x()), div(voxels[i].index.y())};
+        const Tile t{floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)};
         tile_of_[i] = t;
         x0 = std::min(x0, t.tx), y0 = std::min(y0, t.ty), x1 = std::max(x1, t.tx), y1 = std::max(y1, t.ty);
       }
