@@ -76,9 +76,11 @@ bool VoxelMap::restore(std::vector<Voxel> voxels) {
 }
 
 std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t frame,
-                             const std::vector<std::array<std::uint8_t, 4>>* colours) {
+                             const std::vector<std::array<std::uint8_t, 4>>* colours,
+                             std::vector<std::uint32_t>* voxel_of) {
   const std::size_t before = voxels_.size();
   const double limit = static_cast<double>(kOffset - 1) * size_;
+  if (voxel_of) voxel_of->assign(points.size(), kNoVoxel);
   for (std::size_t k = 0; k < points.size(); ++k) {
     const Point3& p = points[k];
     if (!p.allFinite() || p.cwiseAbs().maxCoeff() >= limit) continue;
@@ -94,6 +96,7 @@ std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t fr
       voxels_.push_back(v);
       new_voxels_.push_back(slots_[s]);
     }
+    if (voxel_of) (*voxel_of)[k] = slots_[s];
     Voxel& v = voxels_[slots_[s]];
     // running mean of the points' heights
     v.hits += 1;

@@ -34,9 +34,12 @@ class VoxelMap {
 
   // Adds world points from frame `frame`; returns how many new voxels were created. colours, if
   // given, has one entry per point: RGB and a last byte that is non-zero when the point was seen
-  // by the camera.
+  // by the camera. voxel_of, if given, receives the id of each point's voxel (kNoVoxel for a point
+  // left out: not finite, or beyond the map's +-1 M voxels).
+  static constexpr std::uint32_t kNoVoxel = 0xffffffffu;
   std::size_t insert(const std::vector<Point3>& points, std::uint32_t frame,
-                     const std::vector<std::array<std::uint8_t, 4>>* colours = nullptr);
+                     const std::vector<std::array<std::uint8_t, 4>>* colours = nullptr,
+                     std::vector<std::uint32_t>* voxel_of = nullptr);
 
   // Voxel id of an index, or -1 if the voxel is empty.
   std::int64_t find(const VoxelIndex& index) const;

@@ -14,13 +14,12 @@ using nlohmann::json;
 
 namespace {
 
-// each point takes the label of the voxel it fell in
-std::vector<std::uint8_t> pointLabels(const VoxelMap& map, const std::vector<Point3>& points,
+// each point takes the label of the voxel it fell in (0 for a point in none)
+std::vector<std::uint8_t> pointLabels(const std::vector<std::uint32_t>& voxel_of,
                                       const std::vector<std::uint8_t>& voxel_labels) {
-  std::vector<std::uint8_t> out(points.size(), 0);
-  tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
-    const std::int64_t v = map.find(map.indexOf(points[i]));
-    if (v >= 0) out[i] = voxel_labels[v];
+  std::vector<std::uint8_t> out(voxel_of.size(), 0);
+  tbb::parallel_for(std::size_t{0}, voxel_of.size(), [&](std::size_t i) {
+    if (voxel_of[i] != VoxelMap::kNoVoxel) out[i] = voxel_labels[voxel_of[i]];
   });
   return out;
 }
@@ -31,8 +30,9 @@ std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const V
                                       const GroundSegmentationConfig& ground, double* milliseconds) {
   const auto t0 = std::chrono::steady_clock::now();
   VoxelMap map(voxels);
-  map.insert(points, 0);
-  const std::vector<std::uint8_t> out = pointLabels(map, points, segmentGroundLabels(map, ground).refined);
+  std::vector<std::uint32_t> voxel_of;
+  map.insert(points, 0, nullptr, &voxel_of);
+  const std::vector<std::uint8_t> out = pointLabels(voxel_of, segmentGroundLabels(map, ground).refined);
   if (milliseconds) *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }
@@ -61,8 +61,9 @@ json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::ui
   // the histogram alone: rough labels of the same map
   {
     VoxelMap map(voxels);
-    map.insert(points, 0);
-    j["histogram"] = score(pointLabels(map, points, segmentGroundLabels(map, ground).rough));
+    std::vector<std::uint32_t> voxel_of;
+    map.insert(points, 0, nullptr, &voxel_of);
+    j["histogram"] = score(pointLabels(voxel_of, segmentGroundLabels(map, ground).rough));
   }
   j["fixed_band"] = score(groundByFixedBand(points, {Point3(0, 0, -sensor_height)}, ground.delta));
   j["ransac_plane"] = score(groundByRansacPlane(points, 0.2));
