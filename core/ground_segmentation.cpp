@@ -296,7 +296,6 @@ struct Plane {
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 int floorMod(int a, int b) { return a - floorDiv(a, b) * b; }
 
-
 // sums of a point set, relative to a reference point near it, for least squares in one pass
 struct Moments {
   double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0;
