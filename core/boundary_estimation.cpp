@@ -313,20 +313,6 @@ bool SkylineOwners::otherMayOwn(const Point3& o, const Vector3& dir, double rang
   return false;
 }
 
-std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary) {
-  std::vector<std::int16_t> top;
-  if (boundary.empty() || boundary.type() != CV_8UC1) return top;
-  top.assign(boundary.cols, -1);
-  int missing = boundary.cols;
-  for (int row = 0; row < boundary.rows && missing > 0; ++row) {
-    const std::uint8_t* p = boundary.ptr<std::uint8_t>(row);
-    for (int u = 0; u < boundary.cols; ++u) {
-      if (p[u] && top[u] < 0) top[u] = static_cast<std::int16_t>(row), --missing;
-    }
-  }
-  return top;
-}
-
 BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& boundary,
                                            const CameraIntrinsics& k, const Pose& world_from_camera,
                                            const BoundaryEstimationConfig& cfg, const cv::Mat& rgb,

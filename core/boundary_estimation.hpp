@@ -171,10 +171,6 @@ class SkylineOwners {
   std::vector<std::int32_t> cells_;  // per grid cell: the object there, kEmpty or kMixed
 };
 
-// Per column of a boundary image (CV_8UC1), its topmost boundary pixel's row, -1 where the column
-// has none: the top searched above each vertex. Empty for an empty or non-CV_8UC1 image.
-std::vector<std::int16_t> topBoundaryRows(const cv::Mat& boundary);
-
 struct BoundaryEstimationStats {
   int projected = 0;   // non-ground vertices that fell inside the image
   int estimated = 0;   // of which received a height estimate

@@ -156,16 +156,6 @@ TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
   }
 }
 
-TEST(BoundaryEstimationTest, TopBoundaryRowIsTheTopmostBoundaryOfEachColumn) {
-  cv::Mat boundary(100, 4, CV_8UC1, cv::Scalar(0));
-  boundary.at<std::uint8_t>(50, 0) = 255;
-  boundary.at<std::uint8_t>(30, 0) = 255;
-  boundary.at<std::uint8_t>(99, 2) = 255;
-  boundary.at<std::uint8_t>(0, 3) = 255;
-  EXPECT_EQ(topBoundaryRows(boundary), (std::vector<std::int16_t>{30, -1, 99, 0}));
-  EXPECT_TRUE(topBoundaryRows(cv::Mat()).empty());
-}
-
 // A wall top 12 m high at (3, 20) seen from the origin looking north, and a second object B on the
 // same line of sight, twice as far: the top boundary could be B's unless B is known to be lower
 // than the ray where the ray passes over it.
