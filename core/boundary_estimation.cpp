@@ -90,6 +90,10 @@ std::pair<CellIndex, CellIndex> cellsCovering(const Eigen::AlignedBox2d& box, do
 // objects wider than this either way [m] carry no crown of their own (foliage_tops)
 constexpr double kTrunkWidth = 1.5;
 
+// [px] a crown's foliage that ends against the sky more than this below the topmost boundary on its
+// vertical does not reach that boundary (the sky test reads 3 to 6 px above an edge)
+constexpr int kCrownEndGap = 6;
+
 // Per object of `objects` for the foliage tops: whether it shows foliage (at least half of its top
 // voxels that the camera coloured), and whether it may own a crown's pixel (it shows foliage or is
 // trunk-sized).
@@ -374,6 +378,18 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
       if (sky_test && top < rgb.rows && !skyAbove(rgb, verticals, *px, top, cfg)) {
         ++stats.no_sky;
         return;
+      }
+      // a vertex of a crown: where the first foliage above it (its crown, or the crown over its
+      // trunk) ends against the sky below the topmost boundary, that boundary is something else's
+      // (the edge of a nearer crown, or of a taller one behind)
+      if (foliage_tops && object >= 0 && foliage.leafy[object]) {
+        int end = std::min(v, rgb.rows - 1);
+        while (end > top && !foliage_px(*px, end)) --end;
+        while (end > top && foliage_px(*px, end - 1)) --end;
+        if (end - top > kCrownEndGap && skyAbove(rgb, verticals, *px, end, cfg)) {
+          ++stats.crown_ends;
+          return;
+        }
       }
     }
     // the ray through the top pixel's row where the vertical through the vertex crosses it
