@@ -90,9 +90,10 @@ std::pair<CellIndex, CellIndex> cellsCovering(const Eigen::AlignedBox2d& box, do
 // objects wider than this either way [m] carry no crown of their own (foliage_tops)
 constexpr double kTrunkWidth = 1.5;
 
-// [px] a crown's foliage that ends against the sky more than this below the topmost boundary on its
-// vertical does not reach that boundary (the sky test reads 3 to 6 px above an edge)
-constexpr int kCrownEndGap = 6;
+// [px] an object whose own pixels above its vertex end against the sky more than this below the
+// topmost boundary on its vertical does not reach that boundary (the sky test reads 3 to 6 px above
+// an edge)
+constexpr int kEndBelowTop = 6;
 
 // Per object of `objects` for the foliage tops: whether it shows foliage (at least half of its top
 // voxels that the camera coloured), and whether it may own a crown's pixel (it shows foliage or is
@@ -349,6 +350,10 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     const int u = static_cast<int>(std::floor(verticals.columnAt(px, row + 0.5)));
     return u >= 0 && u < rgb.cols && looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin);
   };
+  const auto sky_px = [&](const Pixel& px, int row) {
+    const int u = static_cast<int>(std::floor(verticals.columnAt(px, row + 0.5)));
+    return u >= 0 && u < rgb.cols && looksLikeSky(rgb.at<cv::Vec3b>(row, u), cfg.sky_blue_margin, cfg.sky_min_brightness);
+  };
   const auto [lo, hi] = cellsCovering(view, cell);
   mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
     // the distance first: it reads only the cell, the label reads the vertex's voxel
@@ -379,15 +384,14 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
         ++stats.no_sky;
         return;
       }
-      // a vertex of a crown: where the first foliage above it (its crown, or the crown over its
-      // trunk) ends against the sky below the topmost boundary, that boundary is something else's
-      // (the edge of a nearer crown, or of a taller one behind)
-      if (foliage_tops && object >= 0 && foliage.leafy[object]) {
-        int end = std::min(v, rgb.rows - 1);
-        while (end > top && !foliage_px(*px, end)) --end;
-        while (end > top && foliage_px(*px, end - 1)) --end;
-        if (end - top > kCrownEndGap && skyAbove(rgb, verticals, *px, end, cfg)) {
-          ++stats.crown_ends;
+      // going up from the vertex's pixel (not sky), an edge to sky that passes the sky test well
+      // below the topmost boundary is where the object ends: that boundary is something else's (a
+      // crown overhanging the object or standing behind it)
+      if (sky_test && v < rgb.rows && !sky_px(*px, v)) {
+        int end = v;
+        while (end - kEndBelowTop > top && !(sky_px(*px, end - 1) && skyAbove(rgb, verticals, *px, end, cfg))) --end;
+        if (end - kEndBelowTop > top) {
+          ++stats.ends_below;
           return;
         }
       }

@@ -324,55 +324,65 @@ TEST(BoundaryEstimationTest, ACrownBeforeABuildingTakesTheTopOfItsFoliage) {
   }
 }
 
-// A crown the lidar saw the underside of, at (3, 20), 3 m up and topped at 6 m, with no ground seen
-// under it (so its top is searched as the topmost boundary), seen from the origin looking north
-// against the sky. Above it in the image, the edge of foliage from 8 to 12 m up at its distance (a
-// nearer crown's overhang) is the topmost boundary of the column, with sky above. Where sky shows
-// between the crown's foliage and that foliage, the crown ends below it: no estimate. Where the
-// foliage runs on up to it, the two cannot be told apart: the estimate is 12 m, as without the test.
-TEST(BoundaryEstimationTest, ACrownWhoseFoliageEndsInSkyIsNotRaisedToFoliageAboveIt) {
+// An object the lidar saw at (3, 20), 3 m up, that ends at 6 m, seen from the origin looking north
+// against the sky: a crown with no ground seen under it (so its top is searched as the topmost
+// boundary) or a grey facade. Above it in the image, foliage from 8 to 12 m up at its distance (a
+// crown overhanging it, or standing behind it) is the topmost boundary of the column, with sky
+// above. Where sky shows between the object and that foliage, the object ends below it: no
+// estimate. Where the object runs on up to it, or the gap fails the sky test (a band of two
+// sky-blue pixels in a facade), or the sky test is off, the estimate is 12 m.
+TEST(BoundaryEstimationTest, AnObjectThatEndsInSkyBelowItsTopmostBoundaryIsNotRaisedToIt) {
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   const Pose world_from_camera = northCamera();
   const Pose camera_from_world = world_from_camera.inverse();
   const auto row = [&](double z) { return static_cast<int>(project(k, camera_from_world * Point3(3.1, 20.1, z))->y()); };
-  const cv::Scalar sky(120, 160, 230), leaves(40, 110, 35), bark(90, 60, 40);
+  const cv::Scalar sky(120, 160, 230), leaves(40, 110, 35), bark(90, 60, 40), facade(150, 150, 150);
   cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
   boundary.row(row(12.0)).setTo(255);
   boundary.row(row(6.0)).setTo(255);
+  enum class Gap { Sky, None, Band };
   struct Case {
-    bool foliage_tops, gap, on_bark;  // on_bark: the vertex's pixel shows bark below the crown
-    double height;                    // expected; 0: no estimate
+    bool crown, on_bark, sky_test;  // on_bark: the crown's vertex's pixel shows bark below it
+    Gap gap;
+    double height;  // expected; 0: no estimate
   };
-  for (const Case c : {Case{true, true, false, 0.0}, Case{true, true, true, 0.0}, Case{true, false, false, 12.0},
-                       Case{true, false, true, 12.0}, Case{false, true, false, 12.0}}) {
+  for (const Case c : {Case{true, false, true, Gap::Sky, 0.0}, Case{true, true, true, Gap::Sky, 0.0},
+                       Case{false, false, true, Gap::Sky, 0.0}, Case{true, false, true, Gap::None, 12.0},
+                       Case{true, true, true, Gap::None, 12.0}, Case{false, false, true, Gap::None, 12.0},
+                       Case{false, false, true, Gap::Band, 12.0}, Case{true, false, false, Gap::Sky, 12.0},
+                       Case{false, false, false, Gap::Sky, 12.0}}) {
+    const cv::Scalar own = c.crown ? leaves : facade;
     cv::Mat rgb(480, 640, CV_8UC3, sky);
     const cv::Range columns(300, 500);
     rgb(cv::Range(row(12.0), row(8.0)), columns).setTo(leaves);
-    rgb(cv::Range(row(c.gap ? 6.0 : 8.0), 480), columns).setTo(leaves);
+    rgb(cv::Range(row(c.gap == Gap::Sky ? 6.0 : 8.0), 480), columns).setTo(own);
+    if (c.gap == Gap::Band) rgb(cv::Range(row(7.0), row(7.0) + 2), columns).setTo(sky);
     if (c.on_bark) rgb(cv::Range(row(3.6), 480), columns).setTo(bark);
     VoxelMap map(VoxelMapConfig{0.2});
     map.insert({Point3(3.05, 20.05, 3.05)}, 0);
     auto& voxel = map.voxels()[0];
     voxel.label = VoxelLabel::NonGround;
     voxel.coloured = true;
-    voxel.r = 40, voxel.g = 110, voxel.b = 35;
+    voxel.r = static_cast<std::uint8_t>(own[0]), voxel.g = static_cast<std::uint8_t>(own[1]),
+    voxel.b = static_cast<std::uint8_t>(own[2]);
     TerrainMesh mesh;
     mesh.update(map, map.takeNewVoxels());
     BoundaryEstimationConfig cfg;
-    cfg.foliage_tops = c.foliage_tops;
     cfg.clear_line = false;
+    cfg.require_sky_above = c.sky_test;
     const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, rgb);
     const MeshVertex& m = mesh.vertices()[0];
-    const std::string what = "foliage_tops " + std::to_string(c.foliage_tops) + ", gap " + std::to_string(c.gap) +
-                             ", on bark " + std::to_string(c.on_bark);
+    const std::string what = std::string(c.crown ? "crown" : "facade") + (c.on_bark ? " on bark" : "") +
+                             ", sky test " + std::to_string(c.sky_test) + ", gap " +
+                             std::to_string(static_cast<int>(c.gap));
     EXPECT_EQ(stats.projected, 1) << what;
     EXPECT_EQ(stats.by_foliage, 0) << what;
     if (c.height == 0) {
       EXPECT_TRUE(m.estimates.empty()) << what;
-      EXPECT_EQ(stats.crown_ends, 1) << what;
+      EXPECT_EQ(stats.ends_below, 1) << what;
       continue;
     }
-    EXPECT_EQ(stats.crown_ends, 0) << what;
+    EXPECT_EQ(stats.ends_below, 0) << what;
     ASSERT_EQ(m.estimates.size(), 1u) << what;
     // a pixel is 6 cm high at 20 m
     EXPECT_NEAR(m.height(), c.height, 0.1) << what;
