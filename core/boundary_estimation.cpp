@@ -345,14 +345,18 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
   const SkylineOwners* owners = cfg.clear_line ? in_view : nullptr;
   const FoliageObjects foliage =
       foliage_tops ? foliageObjects(in_view->objects(), mesh, map, cfg.foliage_margin) : FoliageObjects{};
-  // the pixel at `row` on the vertical through px is foliage
-  const auto foliage_px = [&](const Pixel& px, int row) {
+  // the colour at `row` on the vertical through px; nullptr where it leaves the image's sides
+  const auto colour_at = [&](const Pixel& px, int row) -> const cv::Vec3b* {
     const int u = static_cast<int>(std::floor(verticals.columnAt(px, row + 0.5)));
-    return u >= 0 && u < rgb.cols && looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), cfg.foliage_margin);
+    return u >= 0 && u < rgb.cols ? &rgb.at<cv::Vec3b>(row, u) : nullptr;
+  };
+  const auto foliage_px = [&](const Pixel& px, int row) {
+    const cv::Vec3b* c = colour_at(px, row);
+    return c && looksLikeFoliage(*c, cfg.foliage_margin);
   };
   const auto sky_px = [&](const Pixel& px, int row) {
-    const int u = static_cast<int>(std::floor(verticals.columnAt(px, row + 0.5)));
-    return u >= 0 && u < rgb.cols && looksLikeSky(rgb.at<cv::Vec3b>(row, u), cfg.sky_blue_margin, cfg.sky_min_brightness);
+    const cv::Vec3b* c = colour_at(px, row);
+    return c && looksLikeSky(*c, cfg.sky_blue_margin, cfg.sky_min_brightness);
   };
   const auto [lo, hi] = cellsCovering(view, cell);
   mesh.forEachInCells(lo, hi, [&](std::uint32_t i, const CellIndex& c) {
