@@ -120,6 +120,9 @@ constexpr std::int64_t kMinHistogram = 256;
 // fixed chunks of nodes, so that sums over them come out the same whatever the thread count
 constexpr std::size_t kChunks = 64;
 
+// the arena the parallel loops run in: `threads` workers, or TBB's default for 0
+tbb::task_arena arenaFor(int threads) { return tbb::task_arena(threads > 0 ? threads : tbb::task_arena::automatic); }
+
 }  // namespace
 
 float pairWeight(const GroundSegmentationConfig& cfg, float a, float b) {
@@ -281,7 +284,7 @@ IcmResult icm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_i
 }  // namespace
 
 IcmResult solveIcm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_iterations, int threads) {
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  tbb::task_arena arena = arenaFor(threads);
   checkGrid(p, ground.size(), arena);
   return icm(p, ground, max_iterations, arena);
 }
@@ -900,7 +903,7 @@ void refine(Workspace& ws, const GroundSegmentationConfig& cfg, SegmentationResu
     out.iterations = 0;
   } else {
     // the problem is a grid's by construction (linkNeighbours): solved without solveIcm's check
-    tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena = arenaFor(cfg.threads);
 #ifndef NDEBUG
     checkGrid(ws.problem, ws.labels.size(), arena);
 #endif
@@ -924,7 +927,7 @@ void segmentWhole(const VoxelMap& map, const GroundSegmentationConfig& cfg, Work
   const double cell = map.voxelSize();
   const int k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
   const bool global = cfg.histogram == GroundSegmentationConfig::Histogram::Global;
-  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+  tbb::task_arena arena = arenaFor(cfg.threads);
   arena.execute([&] {
     ws.layout.build(voxels, k);
     const std::size_t tiles = ws.layout.tiles().size();
@@ -1048,7 +1051,7 @@ void IncrementalGroundSegmentation::touch(const std::vector<Point3>& points, dou
   // go into the set
   const std::size_t n = points.size();
   std::vector<std::vector<std::uint64_t>> keys(kChunks);
-  tbb::task_arena arena(st.cfg.threads > 0 ? st.cfg.threads : tbb::task_arena::automatic);
+  tbb::task_arena arena = arenaFor(st.cfg.threads);
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
       std::vector<std::uint64_t>& out = keys[c];
@@ -1131,7 +1134,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   }
   const std::size_t count = keys.size();
   const int k = st.k;
-  tbb::task_arena arena(cfg.threads > 0 ? cfg.threads : tbb::task_arena::automatic);
+  tbb::task_arena arena = arenaFor(cfg.threads);
   arena.execute([&] {
     Workspace& ws = st.work;
     ws.layout.build(voxels, k, tiles, tile_ids);
