@@ -63,6 +63,14 @@ Suite loadSuite(const fs::path& path) {
     m.higher_is_better = better == "higher";
     m.tolerance = v["tolerance"].as<double>();
     if (!(m.tolerance >= 0)) fail(v, "metric '" + m.name + "': tolerance must be >= 0");
+    if (v["count"].IsDefined() != v["min_count"].IsDefined())
+      fail(v, "metric '" + m.name + "': give 'count' (a report field) and 'min_count' together");
+    if (v["count"]) {
+      m.count = v["count"].as<std::string>();
+      m.min_count = v["min_count"].as<double>();
+      if (m.count.empty() || m.count == m.name) fail(v, "metric '" + m.name + "': count must name another report field");
+      if (!(m.min_count >= 0)) fail(v, "metric '" + m.name + "': min_count must be >= 0");
+    }
     s.metrics.push_back(m);
   }
   return s;
@@ -87,8 +95,10 @@ void writeBaseline(const fs::path& path, const Suite& suite, const Results& resu
   j["note"] = "written by 'terrain regress --write-baseline'; guarded metrics only";
   for (const auto& [scenario, metrics] : results) {
     for (const auto& m : suite.metrics) {
-      auto it = metrics.find(m.name);
-      if (it != metrics.end()) j["scenarios"][scenario][m.name] = it->second;
+      for (const std::string* field : {&m.name, &m.count}) {
+        auto it = metrics.find(*field);
+        if (!field->empty() && it != metrics.end()) j["scenarios"][scenario][*field] = it->second;
+      }
     }
   }
   io::writeFileAtomic(path, j.dump(1) + "\n", force);
@@ -105,16 +115,25 @@ RegressionResult compare(const Suite& suite, const Results& baseline, const Resu
       c.higher_is_better = m.higher_is_better;
       const auto b = baseline.find(c.scenario);
       const auto r = results.find(c.scenario);
-      if (b == baseline.end() || r == results.end() || !b->second.count(m.name) || !r->second.count(m.name)) {
+      const auto has = [&](const std::string& field) {
+        return b != baseline.end() && r != results.end() && b->second.count(field) && r->second.count(field);
+      };
+      if (!has(m.name) || (!m.count.empty() && !has(m.count))) {
         c.missing = true;
         c.regressed = true;  // an unguarded metric is a failure: the baseline must be refreshed explicitly
       } else {
         c.baseline = b->second.at(m.name);
         c.value = r->second.at(m.name);
+        if (!m.count.empty()) {
+          c.baseline_count = b->second.at(m.count);
+          c.count = r->second.at(m.count);
+          c.skipped = !(c.baseline_count >= m.min_count && c.count >= m.min_count);
+        }
         const double worse = m.higher_is_better ? c.baseline - c.value : c.value - c.baseline;
-        c.regressed = !(worse <= m.tolerance);
+        c.regressed = !c.skipped && !(worse <= m.tolerance);
       }
       out.regressions += c.regressed;
+      out.skipped += c.skipped;
       out.rows.push_back(c);
     }
   }
@@ -127,9 +146,13 @@ void printTable(std::ostream& out, const RegressionResult& r) {
   for (const auto& c : r.rows) {
     out << std::left << std::setw(24) << c.scenario << std::setw(46) << c.metric << std::right << std::fixed
         << std::setprecision(4) << std::setw(11) << c.baseline << std::setw(11) << c.value << std::setw(11) << c.tolerance
-        << "  " << (c.missing ? "MISSING" : c.regressed ? "REGRESSED" : "ok") << "\n";
+        << "  " << (c.missing ? "MISSING" : c.regressed ? "REGRESSED" : c.skipped ? "skipped" : "ok");
+    if (c.skipped) out << " (count " << std::setprecision(0) << c.baseline_count << " -> " << c.count << ")";
+    out << "\n";
   }
-  out << r.regressions << " regressions in " << r.rows.size() << " checks\n";
+  out << r.regressions << " regressions in " << r.rows.size() - r.skipped << " checks";
+  if (r.skipped > 0) out << ", " << r.skipped << " skipped (too few to compare)";
+  out << "\n";
 }
 
 std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
@@ -173,13 +196,16 @@ std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
 std::string junitXml(const Suite& suite, const RegressionResult& r) {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"" << suite.name << "\" tests=\"" << r.rows.size()
-    << "\" failures=\"" << r.regressions << "\">\n";
+    << "\" failures=\"" << r.regressions << "\" skipped=\"" << r.skipped << "\">\n";
   for (const auto& c : r.rows) {
     x << "  <testcase classname=\"" << c.scenario << "\" name=\"" << c.metric << "\">";
     if (c.regressed) {
       x << "<failure message=\"" << (c.missing ? "no baseline or value" : "past tolerance") << "\">baseline " << c.baseline
         << ", value " << c.value << ", tolerance " << c.tolerance << " (" << (c.higher_is_better ? "higher" : "lower")
         << " is better)</failure>";
+    } else if (c.skipped) {
+      x << "<skipped message=\"too few to compare: count " << c.baseline_count << " in the baseline, " << c.count
+        << " now\"/>";
     }
     x << "</testcase>\n";
   }

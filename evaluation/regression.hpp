@@ -22,6 +22,11 @@ struct MetricSpec {
   std::string name;       // flattened report field, e.g. ground_segmentation.gmrf_icm.f1
   bool higher_is_better = true;
   double tolerance = 0;   // allowed worsening, in the metric's unit
+  // With a count field (another flattened report field, e.g. the cells an error is averaged over),
+  // the metric is compared only where that count is at least min_count in both the baseline and the
+  // run: an average over a handful of cells moves past any tolerance when one cell comes or goes.
+  std::string count;
+  double min_count = 0;
 };
 
 struct Suite {
@@ -45,11 +50,15 @@ struct Comparison {
   bool higher_is_better = true;
   bool missing = false;  // no baseline or no value
   bool regressed = false;
+  // too few to compare (MetricSpec::count below min_count): not compared, not a regression
+  bool skipped = false;
+  double baseline_count = 0, count = 0;
 };
 
 struct RegressionResult {
   std::vector<Comparison> rows;
   int regressions = 0;
+  int skipped = 0;  // rows with too few to compare
 };
 
 // Compares every guarded metric of every scenario with the baseline.

@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <sstream>
+
 namespace terrain::eval {
 namespace {
 
@@ -12,7 +15,7 @@ Suite twoMetricSuite() {
   Suite s;
   s.name = "t";
   s.scenarios = {{"flat", 1, 5}};
-  s.metrics = {{"f1", true, 0.01}, {"mae_m", false, 0.5}};
+  s.metrics = {{"f1", true, 0.01, "", 0}, {"mae_m", false, 0.5, "", 0}};
   return s;
 }
 
@@ -28,6 +31,65 @@ TEST(RegressionTest, PassesWithinToleranceAndFailsPastIt) {
   // a metric without a baseline, or a NaN value, fails
   EXPECT_EQ(compare(s, {{"flat_s1_f5", {{"f1", 0.95}}}}, {{"flat_s1_f5", {{"f1", 0.95}, {"mae_m", 3.0}}}}).regressions, 1);
   EXPECT_EQ(compare(s, baseline, {{"flat_s1_f5", {{"f1", std::nan("")}, {"mae_m", 3.0}}}}).regressions, 1);
+}
+
+TEST(RegressionTest, AnAverageOverTooFewIsNotComparedButStillNeedsItsCount) {
+  Suite s;
+  s.name = "t";
+  s.scenarios = {{"rough", 1, 8}};
+  s.metrics = {{"mae_m", false, 0.5, "cells", 50}};
+  const Results baseline{{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 80}}}};
+  // enough cells on both sides: compared
+  EXPECT_EQ(compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 10.6}, {"cells", 60}}}}).regressions, 0);
+  EXPECT_EQ(compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 14.0}, {"cells", 60}}}}).regressions, 1);
+  // too few now, or in the baseline: skipped, whatever the value
+  const RegressionResult few = compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 18.2}, {"cells", 1}}}});
+  EXPECT_EQ(few.regressions, 0);
+  EXPECT_EQ(few.skipped, 1);
+  ASSERT_EQ(few.rows.size(), 1u);
+  EXPECT_TRUE(few.rows[0].skipped);
+  EXPECT_EQ(few.rows[0].count, 1);
+  EXPECT_EQ(compare(s, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 49}}}}, {{"rough_s1_f8", {{"mae_m", 30.0}, {"cells", 300}}}})
+                .skipped,
+            1);
+  // the count missing from either side fails, as a missing metric does
+  EXPECT_EQ(compare(s, {{"rough_s1_f8", {{"mae_m", 10.2}}}}, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 80}}}}).regressions, 1);
+  EXPECT_EQ(compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 10.2}}}}).regressions, 1);
+  // a NaN count is not enough
+  EXPECT_EQ(compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", std::nan("")}}}}).skipped, 1);
+  // the table and the JUnit XML say so
+  std::ostringstream table;
+  printTable(table, few);
+  EXPECT_NE(table.str().find("skipped (count 80 -> 1)"), std::string::npos) << table.str();
+  EXPECT_NE(table.str().find("0 regressions in 0 checks, 1 skipped"), std::string::npos) << table.str();
+  const std::string xml = junitXml(s, few);
+  EXPECT_NE(xml.find("skipped=\"1\""), std::string::npos) << xml;
+  EXPECT_NE(xml.find("<skipped message="), std::string::npos) << xml;
+
+  // the baseline keeps the count with the metric; a suite names both or neither
+  test::TempDir dir;
+  writeBaseline(dir / "b.json", s, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 80}, {"other", 1}}}}, false);
+  const Results back = loadBaseline(dir / "b.json");
+  EXPECT_EQ(back.at("rough_s1_f8").at("cells"), 80);
+  EXPECT_EQ(back.at("rough_s1_f8").count("other"), 0u);
+  io::writeFileAtomic(dir / "s.yaml",
+                      "scenarios:\n  - {type: rough}\nmetrics:\n  mae_m: {better: lower, tolerance: 0.5, count: cells, "
+                      "min_count: 50}\n",
+                      true);
+  const Suite loaded = loadSuite(dir / "s.yaml");
+  ASSERT_EQ(loaded.metrics.size(), 1u);
+  EXPECT_EQ(loaded.metrics[0].count, "cells");
+  EXPECT_EQ(loaded.metrics[0].min_count, 50);
+  io::writeFileAtomic(dir / "half.yaml",
+                      "scenarios:\n  - {type: rough}\nmetrics:\n  mae_m: {better: lower, tolerance: 0.5, count: cells}\n", true);
+  try {
+    loadSuite(dir / "half.yaml");
+    FAIL();
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("half.yaml:4: metric 'mae_m': give 'count' (a report field) and 'min_count' together"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(RegressionTest, BaselinesAndSuitesRoundTripAndJunitNamesFailures) {
