@@ -101,6 +101,9 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_option("--ky", c.boundary.ky, "weight of vertical change in the gradient")->capture_default_str();
   cmd.add_flag("--erode-all-directions,!--erode-horizontal", c.boundary.erode_all_directions,
                "erosion keeps thin boundaries of every direction, or near-horizontal ones only (default: near-horizontal)");
+  cmd.add_flag("--erode-sloping,!--no-erode-sloping", c.boundary.erode_sloping,
+               "the near-horizontal erosion also keeps boundaries sloping up to 1 row per column, away from foliage "
+               "(roof lines seen obliquely) (default: on)");
   cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")->capture_default_str();
   cmd.add_flag("--clear-line,!--no-clear-line", c.estimation.clear_line,
                "skip a frame's estimate when another sensed object stands in the vertex's image column (default: on)");

@@ -56,6 +56,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"boundary.dilate_width", integer(c.boundary.dilate_width)},
       {"boundary.dilate_height", integer(c.boundary.dilate_height)},
       {"boundary.erode_all_directions", [&c](const YAML::Node& n) { c.boundary.erode_all_directions = n.as<bool>(); }},
+      {"boundary.erode_sloping", [&c](const YAML::Node& n) { c.boundary.erode_sloping = n.as<bool>(); }},
       {"estimation.max_distance", num(c.estimation.max_distance)},
       {"estimation.max_height", num(c.estimation.max_height)},
       {"estimation.top_margin", integer(c.estimation.top_margin)},
@@ -212,7 +213,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},
                    {"threshold", c.boundary.threshold}, {"erode_width", c.boundary.erode_width},
                    {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},
-                   {"dilate_height", c.boundary.dilate_height}, {"erode_all_directions", c.boundary.erode_all_directions}};
+                   {"dilate_height", c.boundary.dilate_height}, {"erode_all_directions", c.boundary.erode_all_directions},
+                   {"erode_sloping", c.boundary.erode_sloping}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
                      {"top_margin", c.estimation.top_margin}, {"max_estimates", c.estimation.max_estimates},
                      {"fusion_quantile", c.estimation.fusion_quantile},

@@ -2,9 +2,45 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace terrain {
+
+namespace {
+
+// green at least this many grey levels above both red and blue: foliage in daylight
+constexpr int kFoliageMargin = 10;
+
+// The boundary pixels that survive an erosion along a line of erode_width px (erode_height thick)
+// sloping at +-1/4, +-1/2 or +-1 rows per column, less those within 2 px of a foliage-coloured
+// pixel (an RGB image only).
+cv::Mat slopingRuns(const cv::Mat& raw, const cv::Mat& image, const BoundaryDetectionConfig& c) {
+  const int n = c.erode_width;
+  cv::Mat runs = cv::Mat::zeros(raw.size(), CV_8UC1), part;
+  for (const double slope : {0.25, -0.25, 0.5, -0.5, 1.0, -1.0}) {
+    // row offset of each of the line's columns from its middle
+    std::vector<int> dy(n);
+    for (int x = 0; x < n; ++x) dy[x] = static_cast<int>(std::lround(slope * (x - 0.5 * (n - 1))));
+    const int lo = *std::min_element(dy.begin(), dy.end()), hi = *std::max_element(dy.begin(), dy.end());
+    cv::Mat mask = cv::Mat::zeros(hi - lo + c.erode_height, n, CV_8UC1);
+    for (int x = 0; x < n; ++x) mask(cv::Rect(x, dy[x] - lo, 1, c.erode_height)).setTo(1);
+    cv::erode(raw, part, mask, cv::Point(n / 2, -lo + c.erode_height / 2));
+    runs |= part;
+  }
+  if (image.type() == CV_8UC3) {
+    cv::Mat rgb[3], foliage;
+    cv::split(image, rgb);
+    foliage = (rgb[1] - rgb[0] >= kFoliageMargin) & (rgb[1] - rgb[2] >= kFoliageMargin);
+    cv::dilate(foliage, foliage, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+    runs &= ~foliage;
+  }
+  return runs;
+}
+
+}  // namespace
 
 BoundaryImages detectBoundaries(const cv::Mat& image, const BoundaryDetectionConfig& c) {
   if (image.empty()) throw std::invalid_argument("boundary detection: empty image");
@@ -47,6 +83,7 @@ BoundaryImages detectBoundaries(const cv::Mat& image, const BoundaryDetectionCon
     }
   } else {
     cv::erode(out.raw, eroded, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(c.erode_width, c.erode_height)));
+    if (c.erode_sloping) eroded |= slopingRuns(out.raw, image, c);
   }
   cv::dilate(eroded, out.cleaned, dilate_mask);
   return out;

@@ -77,6 +77,7 @@ TEST(BoundaryDetectionTest, ErosionInAllDirectionsKeepsASlopingEdge) {
     }
     return n;
   };
+  c.erode_sloping = false;  // the one horizontal erosion when erode_all_directions is off
   for (const bool all : {true, false}) {
     c.erode_all_directions = all;
     const BoundaryImages b = detectBoundaries(img, c);
@@ -91,6 +92,50 @@ TEST(BoundaryDetectionTest, ErosionInAllDirectionsKeepsASlopingEdge) {
     EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(30, 10, 20, 20))), 0) << all;
     EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(280, 20, 20, 20))), 0) << all;
   }
+}
+
+TEST(BoundaryDetectionTest, SlopingErosionKeepsAnObliqueRoofLineButNotACrownsOutline) {
+  // a roof line seen obliquely, rising a row per column from (20, 150) to (120, 50), against the
+  // sky, and two single-pixel specks in the sky
+  const cv::Vec3b sky(150, 190, 240), facade(120, 100, 90), leaves(40, 110, 40);
+  auto scene = [&](const cv::Vec3b& body) {
+    cv::Mat img(200, 320, CV_8UC3, sky);
+    const std::vector<cv::Point> roof{{20, 150}, {120, 50}, {300, 50}, {300, 199}, {20, 199}};
+    cv::fillPoly(img, std::vector<std::vector<cv::Point>>{roof}, body);
+    img.at<cv::Vec3b>(20, 40) = cv::Vec3b(0, 0, 0);
+    img.at<cv::Vec3b>(30, 250) = cv::Vec3b(0, 0, 0);
+    return img;
+  };
+  // columns of the roof line's middle, 40 to 100, with a boundary pixel within 2 rows of it
+  auto on_line = [](const cv::Mat& b) {
+    int n = 0;
+    for (int x = 40; x <= 100; ++x) {
+      const int y = 150 - (x - 20);
+      n += cv::countNonZero(b(cv::Rect(x, y - 2, 1, 5))) > 0;
+    }
+    return n;
+  };
+  BoundaryDetectionConfig c;
+  ASSERT_TRUE(c.erode_sloping);  // on by default
+  const BoundaryImages sloping = detectBoundaries(scene(facade), c);
+  EXPECT_EQ(on_line(sloping.raw), 61);
+  EXPECT_EQ(on_line(sloping.cleaned), 61);
+  c.erode_sloping = false;
+  const BoundaryImages level = detectBoundaries(scene(facade), c);
+  EXPECT_EQ(on_line(level.raw), 61);
+  // a run of a pixel or two per row: the horizontal mask leaves little of it
+  EXPECT_LT(on_line(level.cleaned), 10) << on_line(level.cleaned);
+  // the specks go either way
+  for (const BoundaryImages* b : {&sloping, &level}) {
+    EXPECT_EQ(cv::countNonZero(b->cleaned(cv::Rect(30, 10, 20, 20))), 0);
+    EXPECT_EQ(cv::countNonZero(b->cleaned(cv::Rect(240, 20, 20, 20))), 0);
+  }
+  // the same outline in foliage colours is left to the horizontal mask
+  c.erode_sloping = true;
+  const BoundaryImages crown = detectBoundaries(scene(leaves), c);
+  EXPECT_EQ(on_line(crown.raw), 61);
+  c.erode_sloping = false;
+  EXPECT_EQ(on_line(crown.cleaned), on_line(detectBoundaries(scene(leaves), c).cleaned));
 }
 
 TEST(BoundaryDetectionTest, VerticalChangesWeighMoreThanHorizontal) {
