@@ -57,19 +57,24 @@ Suite loadSuite(const fs::path& path) {
     MetricSpec m;
     m.name = kv.first.as<std::string>();
     const YAML::Node v = kv.second;
-    if (!v["better"] || !v["tolerance"]) fail(v, "metric '" + m.name + "' needs 'better' (higher/lower) and 'tolerance'");
-    const std::string better = v["better"].as<std::string>();
-    if (better != "higher" && better != "lower") fail(v, "metric '" + m.name + "': better must be higher or lower");
-    m.higher_is_better = better == "higher";
-    m.tolerance = v["tolerance"].as<double>();
-    if (!(m.tolerance >= 0)) fail(v, "metric '" + m.name + "': tolerance must be >= 0");
-    if (v["count"].IsDefined() != v["min_count"].IsDefined())
-      fail(v, "metric '" + m.name + "': give 'count' (a report field) and 'min_count' together");
-    if (v["count"]) {
-      m.count = v["count"].as<std::string>();
-      m.min_count = v["min_count"].as<double>();
-      if (m.count.empty() || m.count == m.name) fail(v, "metric '" + m.name + "': count must name another report field");
-      if (!(m.min_count >= 0)) fail(v, "metric '" + m.name + "': min_count must be >= 0");
+    if (!v.IsMap() || !v["better"] || !v["tolerance"])
+      fail(v, "metric '" + m.name + "' needs 'better' (higher/lower) and 'tolerance'");
+    try {
+      const std::string better = v["better"].as<std::string>();
+      if (better != "higher" && better != "lower") fail(v, "metric '" + m.name + "': better must be higher or lower");
+      m.higher_is_better = better == "higher";
+      m.tolerance = v["tolerance"].as<double>();
+      if (!(m.tolerance >= 0)) fail(v, "metric '" + m.name + "': tolerance must be >= 0");
+      if (v["count"].IsDefined() != v["min_count"].IsDefined())
+        fail(v, "metric '" + m.name + "': give 'count' (a report field) and 'min_count' together");
+      if (v["count"]) {
+        m.count = v["count"].as<std::string>();
+        m.min_count = v["min_count"].as<double>();
+        if (m.count.empty() || m.count == m.name) fail(v, "metric '" + m.name + "': count must name another report field");
+        if (!(m.min_count >= 0)) fail(v, "metric '" + m.name + "': min_count must be >= 0");
+      }
+    } catch (const YAML::Exception& e) {
+      fail(v, "metric '" + m.name + "': bad value (" + e.msg + ")");
     }
     s.metrics.push_back(m);
   }

@@ -80,6 +80,16 @@ TEST(RegressionTest, AnAverageOverTooFewIsNotComparedButStillNeedsItsCount) {
   ASSERT_EQ(loaded.metrics.size(), 1u);
   EXPECT_EQ(loaded.metrics[0].count, "cells");
   EXPECT_EQ(loaded.metrics[0].min_count, 50);
+  io::writeFileAtomic(dir / "word.yaml",
+                      "scenarios:\n  - {type: rough}\nmetrics:\n  mae_m: {better: lower, tolerance: 0.5, count: cells, "
+                      "min_count: many}\n",
+                      true);
+  try {
+    loadSuite(dir / "word.yaml");
+    FAIL();
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("word.yaml:4: metric 'mae_m': bad value"), std::string::npos) << e.what();
+  }
   io::writeFileAtomic(dir / "half.yaml",
                       "scenarios:\n  - {type: rough}\nmetrics:\n  mae_m: {better: lower, tolerance: 0.5, count: cells}\n", true);
   try {
