@@ -82,10 +82,15 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
 }
 
 // options that fill the pipeline settings; defaults shown in --help
+// The pipeline's options; with ground_only, those of the voxel map and the ground segmentation alone
+// (a command that segments single scans: no camera, no frames).
 void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_file, std::string& histogram,
-                        std::string& solver, std::vector<std::string>& settings) {
-  cmd.add_option("--config", config_file, "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
-                                          "estimation, footprint, crown); command-line options override it");
+                        std::string& solver, std::vector<std::string>& settings, bool ground_only = false) {
+  cmd.add_option("--config", config_file,
+                 ground_only ? "YAML file with pipeline settings (of its sections, voxel_map and ground apply here); "
+                               "command-line options override it"
+                             : "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
+                               "estimation, footprint, crown); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
   cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
       ->capture_default_str();
@@ -95,6 +100,12 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_option("--beta", c.ground.beta, "GMRF pair-site Potts weight")->capture_default_str();
   cmd.add_option("--gamma", c.ground.gamma, "GMRF pair-site height-contrast weight")->capture_default_str();
   cmd.add_option("--tile-size", c.ground.tile_size, "local histogram tile edge [m]")->capture_default_str();
+  if (ground_only) {
+    cmd.add_option("--set", settings,
+                   "KEY=VALUE: any voxel_map or ground setting by its name in the --config file (section.field, e.g. "
+                   "ground.icm_iterations=4); repeatable; applied after --config and the options above");
+    return;
+  }
   cmd.add_option("--segment-every", c.segment_every, "run ground segmentation every N frames")->capture_default_str();
   cmd.add_option("--boundary-threshold", c.boundary.threshold, "boundary gradient threshold (grey levels)")->capture_default_str();
   cmd.add_option("--kx", c.boundary.kx, "weight of horizontal change in the gradient")->capture_default_str();
@@ -651,7 +662,7 @@ int main(int argc, char** argv) {
   kitti->add_option("--scan", kitti_scans, "KITTI .bin scan(s); labels are read from the .label file beside each")->required();
   kitti->add_option("--sensor-height", kitti_height, "lidar height above the road [m]")->capture_default_str();
   kitti->add_option("--json", kitti_json, "also write the scores as JSON");
-  addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
+  addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings, true);
 
   CLI11_PARSE(app, argc, argv);
   try {
@@ -707,6 +718,10 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (kitti->parsed()) {
+      for (const std::string& s : pipe_settings) {
+        if (s.rfind("voxel_map.", 0) != 0 && s.rfind("ground.", 0) != 0)
+          throw io::InputError("--set " + s + ": kitti segments single scans and reads only voxel_map and ground settings");
+      }
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       nlohmann::json all;
       std::cout << std::fixed << std::setprecision(3) << "scan          method                 F1     IoU    precision recall\n";
