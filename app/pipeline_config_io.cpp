@@ -57,6 +57,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"boundary.dilate_height", integer(c.boundary.dilate_height)},
       {"boundary.erode_all_directions", [&c](const YAML::Node& n) { c.boundary.erode_all_directions = n.as<bool>(); }},
       {"boundary.erode_sloping", [&c](const YAML::Node& n) { c.boundary.erode_sloping = n.as<bool>(); }},
+      {"boundary.foliage_margin", integer(c.boundary.foliage_margin)},
       {"estimation.max_distance", num(c.estimation.max_distance)},
       {"estimation.max_height", num(c.estimation.max_height)},
       {"estimation.top_margin", integer(c.estimation.top_margin)},
@@ -176,6 +177,8 @@ void validate(const PipelineConfig& c) {
           "[0, 255] grey levels");
   require(c.estimation.foliage_margin >= 0 && c.estimation.foliage_margin <= 255, "estimation.foliage_margin",
           c.estimation.foliage_margin, "[0, 255] grey levels");
+  require(c.boundary.foliage_margin >= 0 && c.boundary.foliage_margin <= 255, "boundary.foliage_margin",
+          c.boundary.foliage_margin, "[0, 255] grey levels");
   require(c.crown.max_trunk_gap >= 0 && c.crown.max_trunk_gap <= 100, "crown.max_trunk_gap", c.crown.max_trunk_gap,
           "[0, 100] m");
   require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
@@ -214,7 +217,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                    {"threshold", c.boundary.threshold}, {"erode_width", c.boundary.erode_width},
                    {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},
                    {"dilate_height", c.boundary.dilate_height}, {"erode_all_directions", c.boundary.erode_all_directions},
-                   {"erode_sloping", c.boundary.erode_sloping}};
+                   {"erode_sloping", c.boundary.erode_sloping}, {"foliage_margin", c.boundary.foliage_margin}};
   j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
                      {"top_margin", c.estimation.top_margin}, {"max_estimates", c.estimation.max_estimates},
                      {"fusion_quantile", c.estimation.fusion_quantile},

@@ -9,10 +9,21 @@
 
 namespace terrain {
 
-namespace {
+bool looksLikeFoliage(const cv::Vec3b& c, int margin) {
+  const int r = c[0], g = c[1], b = c[2];
+  return g >= r + margin && g >= b + margin;
+}
 
-// green at least this many grey levels above both red and blue: foliage in daylight
-constexpr int kFoliageMargin = 10;
+cv::Mat foliageMask(const cv::Mat& rgb, int margin) {
+  if (rgb.type() != CV_8UC3) throw std::invalid_argument("foliage mask: expected an 8-bit RGB image");
+  // in 16-bit signed arithmetic: g - r >= margin and g - b >= margin, whatever the margin's sign
+  cv::Mat channels[3], r, g, b;
+  cv::split(rgb, channels);
+  channels[0].convertTo(r, CV_16S), channels[1].convertTo(g, CV_16S), channels[2].convertTo(b, CV_16S);
+  return (g - r >= margin) & (g - b >= margin);
+}
+
+namespace {
 
 // The boundary pixels that survive an erosion along a line of erode_width px (erode_height thick)
 // sloping at +-1/4, +-1/2 or +-1 rows per column, less those within 2 px of a foliage-coloured
@@ -31,10 +42,8 @@ cv::Mat slopingRuns(const cv::Mat& raw, const cv::Mat& image, const BoundaryDete
     runs |= part;
   }
   if (image.type() == CV_8UC3) {
-    cv::Mat rgb[3], foliage;
-    cv::split(image, rgb);
-    foliage = (rgb[1] - rgb[0] >= kFoliageMargin) & (rgb[1] - rgb[2] >= kFoliageMargin);
-    cv::dilate(foliage, foliage, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+    cv::Mat foliage;
+    cv::dilate(foliageMask(image, c.foliage_margin), foliage, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
     runs &= ~foliage;
   }
   return runs;

@@ -28,8 +28,8 @@ struct BoundaryDetectionConfig {
   // line of erode_width px sloping at +-1/4, +-1/2 or +-1 rows per column: a roof line that
   // perspective slopes (a building beside the path, seen obliquely) stays, where the horizontal
   // mask left only dots of it and the topmost boundary above its walls fell on the facade's texture.
-  // Sloping runs within 2 px of foliage-coloured pixels (green at least 10 grey levels above red
-  // and blue; RGB images) are left out: kept, the rounded tops of crowns behind a tree became its
+  // Sloping runs within 2 px of foliage-coloured pixels (looksLikeFoliage with foliage_margin; RGB
+  // images) are left out: kept, the rounded tops of crowns behind a tree became its
   // top. On 60 frames of 12 scenes (urban seeds 1-5, forest 1-2, mixed 1-2, flat, slope, rough)
   // buildings at their real height went from 45 to 50 of 69 (6 gained on flat, mixed 1 and 2,
   // rough, slope and urban 2, one 41 m building lost on mixed 2), none more too high; trees
@@ -38,7 +38,14 @@ struct BoundaryDetectionConfig {
   // (0.47 -> 0.54 m), slope (0.63 -> 0.93 m) and forest 2 (5.98 -> 6.04 m); terrain cells raised by
   // mistake 895 -> 931. Without the foliage rule, 4 more trees stood too high.
   bool erode_sloping = true;
+  int foliage_margin = 10;  // [grey levels] of the foliage colour rule, for erode_sloping
 };
+
+// The foliage colour rule for one RGB colour: green at least margin grey levels above both red and
+// blue, as leaves in daylight.
+bool looksLikeFoliage(const cv::Vec3b& rgb, int margin);
+// The same rule over an RGB image (CV_8UC3): CV_8UC1, 255 where a pixel is foliage-coloured.
+cv::Mat foliageMask(const cv::Mat& rgb, int margin);
 
 struct BoundaryImages {
   cv::Mat magnitude;  // CV_32FC1 gradient magnitude, Eq. 4

@@ -143,10 +143,6 @@ bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
   return b >= r + blue_margin && b >= g && (r + g + b) / 3 >= min_brightness;
 }
 
-bool looksLikeFoliage(const cv::Vec3b& c, int margin) {
-  const int r = c[0], g = c[1], b = c[2];
-  return g >= r + margin && g >= b + margin;
-}
 
 bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, double change, double min_gap,
                    double max_gap, double min_t) {

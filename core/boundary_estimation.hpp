@@ -131,10 +131,6 @@ bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, d
 // levels above red and not below green, with a mean brightness of at least min_brightness.
 bool looksLikeSky(const cv::Vec3b& rgb, int blue_margin, int min_brightness);
 
-// The foliage colour rule for one RGB colour: green at least margin grey levels above both red and
-// blue, as leaves in daylight.
-bool looksLikeFoliage(const cv::Vec3b& rgb, int margin);
-
 // The objects the lidar saw: 8-connected groups of mesh vertices whose top voxel is non-ground,
 // numbered in the order of their lowest vertex id. With a region (world x, y [m]), only the
 // objects with a vertex whose cell centre lies in it, whole (also where they reach beyond it),

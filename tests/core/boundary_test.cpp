@@ -138,6 +138,36 @@ TEST(BoundaryDetectionTest, SlopingErosionKeepsAnObliqueRoofLineButNotACrownsOut
   EXPECT_EQ(on_line(crown.cleaned), on_line(detectBoundaries(scene(leaves), c).cleaned));
 }
 
+TEST(BoundaryDetectionTest, FoliageMaskFollowsThePerPixelRule) {
+  // every red and blue level against green levels around them, margins of 0, 10 and 40
+  cv::Mat rgb(256, 256 * 3, CV_8UC3);
+  for (int r = 0; r < 256; ++r) {
+    for (int x = 0; x < rgb.cols; ++x) {
+      const int g = x % 256, b = (x / 256) * 120;
+      rgb.at<cv::Vec3b>(r, x) = cv::Vec3b(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b));
+    }
+  }
+  for (const int margin : {0, 10, 40}) {
+    const cv::Mat mask = foliageMask(rgb, margin);
+    ASSERT_EQ(mask.type(), CV_8UC1);
+    int disagree = 0, foliage = 0;
+    for (int v = 0; v < rgb.rows; ++v) {
+      for (int u = 0; u < rgb.cols; ++u) {
+        const bool rule = looksLikeFoliage(rgb.at<cv::Vec3b>(v, u), margin);
+        disagree += rule != (mask.at<std::uint8_t>(v, u) == 255);
+        foliage += rule;
+      }
+    }
+    EXPECT_EQ(disagree, 0) << "margin " << margin;
+    EXPECT_GT(foliage, 0) << "margin " << margin;
+  }
+  // the rule itself, by hand: green 10 above red and blue is foliage at margin 10, 9 above is not
+  EXPECT_TRUE(looksLikeFoliage(cv::Vec3b(40, 50, 40), 10));
+  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(41, 50, 40), 10));
+  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(40, 50, 41), 10));
+  EXPECT_THROW(foliageMask(cv::Mat(4, 4, CV_8UC1, cv::Scalar(0)), 10), std::invalid_argument);
+}
+
 TEST(BoundaryDetectionTest, VerticalChangesWeighMoreThanHorizontal) {
   cv::Mat horizontal_edge(50, 50, CV_8UC1, cv::Scalar(0)), vertical_edge(50, 50, CV_8UC1, cv::Scalar(0));
   horizontal_edge(cv::Rect(0, 25, 50, 25)).setTo(100);
