@@ -151,6 +151,18 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       row(it.key() + " m, after", it.value()["after"]);
     }
   }
+  // the three largest non-zero counts of an outcome map, largest first ("name n, ...")
+  const auto largest = [](const nlohmann::json& counts) {
+    std::vector<std::pair<std::uint64_t, std::string>> v;
+    for (auto c = counts.begin(); c != counts.end(); ++c) {
+      if (c.value().get<std::uint64_t>() > 0) v.emplace_back(c.value().get<std::uint64_t>(), c.key());
+    }
+    std::stable_sort(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::string out;
+    for (std::size_t i = 0; i < std::min<std::size_t>(3, v.size()); ++i)
+      out += (i ? ", " : "") + v[i].second + " " + std::to_string(v[i].first);
+    return out.empty() ? std::string("none") : out;
+  };
   if (hr.contains("object_tops")) {
     // each object whose top the camera saw: its true, sensed and recovered top
     const auto& tops = hr["object_tops"];
@@ -162,14 +174,18 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
         << " after recovery, of " << t["top_seen"].get<std::size_t>() << ". ";
     }
     h << "</p><table><tr><th>object</th><th>class</th><th>true top m</th><th>sensed top m</th><th>recovered top m</th>"
-         "<th>error m</th><th>frames</th><th>cells</th></tr>";
+         "<th>error m</th><th>frames</th><th>cells</th><th>estimation (vertex-frames)</th><th>crown (frames: verdict)</th></tr>";
     for (auto it = tops["list"].begin(); it != tops["list"].end(); ++it) {
       const auto& o = it.value();
       const bool ok = std::abs(o["error_m"].get<double>()) <= o["tolerance_m"].get<double>();
       h << "<tr><td style=\"text-align:left\">" << it.key() << "</td><td>" << o["class"].get<std::string>() << "</td><td>"
         << fmt(o["true_top_m"]) << "</td><td>" << fmt(o["sensed_top_m"]) << "</td><td>" << fmt(o["recovered_top_m"])
         << "</td><td" << (ok ? "" : " style=\"color:#b00\"") << ">" << fmt(o["error_m"]) << "</td><td>"
-        << o["frames_top_seen"].get<int>() << "</td><td>" << o["cells"].get<std::size_t>() << "</td></tr>";
+        << o["frames_top_seen"].get<int>() << "</td><td>" << o["cells"].get<std::size_t>() << "</td><td style=\"text-align:left\">"
+        << (o.contains("estimation_outcomes") ? largest(o["estimation_outcomes"]) : "") << "</td><td style=\"text-align:left\">";
+      if (o.contains("crown") && o["crown"].is_object())
+        h << largest(o["crown"]["outcomes"]) << ": " << o["crown"]["verdict"].get<std::string>();
+      h << "</td></tr>";
     }
   }
   h << "</table><h3>Height map over object cells</h3><table><tr><th>method</th><th>coverage</th><th>MAE m</th><th>bias m</th></tr>";

@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr char kMagic[] = "terrain-run-state/2\n";
+constexpr char kMagic[] = "terrain-run-state/3\n";
 
 // little-endian machine layout of plain values, appended to a byte string
 class Out {
@@ -141,12 +141,20 @@ void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::Ru
     p.put<std::int32_t>(m.cell.x()), p.put<std::int32_t>(m.cell.y()), p.put(m.top_voxel);
     p.put(m.sensed_height), p.put(m.recovered_height), p.put<std::uint8_t>(m.spread), p.put<std::uint8_t>(m.parallax);
     p.putAll(m.estimates);
+    for (std::uint16_t n : m.outcomes) p.put(n);
   }
   const SegmentationResult& s = pipeline.segmentation();
   p.putAll(s.rough), p.putAll(s.refined), p.putAll(s.ground_height);
   p.put(s.energy_rough), p.put(s.energy_refined), p.put<std::int32_t>(s.iterations), p.put<std::int32_t>(s.tiles);
   p.put<std::uint64_t>(pipeline.records().size());
   for (const auto& r : pipeline.records()) putRecord(p, r);
+  const std::vector<CrownRecord> crowns = pipeline.crownRecords();
+  p.put<std::uint64_t>(crowns.size());
+  for (const auto& c : crowns) {
+    p.put(c.key), p.put(c.centre.x()), p.put(c.centre.y());
+    for (std::uint16_t n : c.outcomes) p.put(n);
+    p.put(static_cast<std::uint8_t>(c.verdict));
+  }
   // the truth beside it
   Out t;
   t.put<double>(truth.voxels.voxelSize());
@@ -223,7 +231,7 @@ SavedRun readRunState(const fs::path& out) {
   In p(io::readFile(pipeline_file), pipeline_file.string());
   std::vector<Voxel> voxels(static_cast<std::size_t>(p.count("voxels", kVoxelBytes)));
   for (auto& v : voxels) v = getVoxel(p);
-  std::vector<MeshVertex> vertices(static_cast<std::size_t>(p.count("mesh vertices", 30)));
+  std::vector<MeshVertex> vertices(static_cast<std::size_t>(p.count("mesh vertices", 30 + 2 * kEstimateOutcomes)));
   for (auto& m : vertices) {
     const auto x = p.get<std::int32_t>("mesh vertex"), y = p.get<std::int32_t>("mesh vertex");
     m.cell = CellIndex(x, y);
@@ -232,6 +240,7 @@ SavedRun readRunState(const fs::path& out) {
     m.spread = p.get<std::uint8_t>("mesh vertex") != 0;
     m.parallax = p.get<std::uint8_t>("mesh vertex") != 0;
     m.estimates = p.getAll<HeightEstimate>("mesh vertex estimates");
+    for (std::uint16_t& n : m.outcomes) n = p.get<std::uint16_t>("mesh vertex outcomes");
   }
   SegmentationResult s;
   s.rough = p.getAll<std::uint8_t>("rough labels");
@@ -241,9 +250,19 @@ SavedRun readRunState(const fs::path& out) {
   s.iterations = p.get<std::int32_t>("segmentation"), s.tiles = p.get<std::int32_t>("segmentation");
   std::vector<FrameRecord> records(static_cast<std::size_t>(p.count("records", 100)));
   for (auto& r : records) r = getRecord(p);
+  std::vector<CrownRecord> crowns(static_cast<std::size_t>(p.count("crown records", 13 + 2 * kCrownOutcomes)));
+  for (auto& c : crowns) {
+    c.key = p.get<std::uint32_t>("crown record");
+    const float x = p.get<float>("crown record"), y = p.get<float>("crown record");
+    c.centre = Eigen::Vector2f(x, y);
+    for (std::uint16_t& n : c.outcomes) n = p.get<std::uint16_t>("crown record outcomes");
+    const auto verdict = p.get<std::uint8_t>("crown record verdict");
+    if (verdict > static_cast<std::uint8_t>(CrownVerdict::Raised)) p.fail("crown record verdict " + std::to_string(verdict) + " is unknown");
+    c.verdict = static_cast<CrownVerdict>(verdict);
+  }
   p.end();
   run.pipeline = std::make_unique<Pipeline>(calibration, config);
-  if (!run.pipeline->restore(std::move(voxels), std::move(vertices), std::move(s), std::move(records))) {
+  if (!run.pipeline->restore(std::move(voxels), std::move(vertices), std::move(s), std::move(records), crowns)) {
     p.fail("voxels, mesh and labels do not fit together (duplicate voxels or cells, labels not one per voxel, or a vertex's top voxel out of range)");
   }
 

@@ -377,12 +377,13 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
     if (by_foliage) {
       top = v;
       while (top > 0 && foliage_px(*px, top - 1)) --top;
-      if (top <= cfg.top_margin) return;
+      if (top <= cfg.top_margin) return m.count(EstimateOutcome::CutOff);
     } else {
-      if (top < 0 || top > v || top <= cfg.top_margin) return;
+      if (top < 0 || top > v) return m.count(EstimateOutcome::NoTopBoundary);
+      if (top <= cfg.top_margin) return m.count(EstimateOutcome::CutOff);
       if (sky_test && top < rgb.rows && !skyAbove(rgb, verticals, *px, top, cfg)) {
         ++stats.no_sky;
-        return;
+        return m.count(EstimateOutcome::NoSky);
       }
       // going up from the vertex's pixel (not sky), an edge to sky that passes the sky test well
       // below the topmost boundary is where the object ends: that boundary is something else's (a
@@ -392,19 +393,21 @@ BoundaryEstimationStats estimateBoundaries(TerrainMesh& mesh, const VoxelMap& ma
         while (end - kEndBelowTop > top && !(sky_px(*px, end - 1) && skyAbove(rgb, verticals, *px, end, cfg))) --end;
         if (end - kEndBelowTop > top) {
           ++stats.ends_below;
-          return;
+          return m.count(EstimateOutcome::EndsBelow);
         }
       }
     }
     // the ray through the top pixel's row where the vertical through the vertex crosses it
     const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(*px, top + 0.5), top + 0.5));
     const double h = heightAbove(centre, dir, x, y);
-    if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height) return;
+    if (!std::isfinite(h) || h <= m.sensed_height || h > m.sensed_height + cfg.max_height)
+      return m.count(EstimateOutcome::Implausible);
     if (owners && owners->otherMayOwn(centre, dir, cfg.max_distance, object, Eigen::Vector2d(x, y), 1.0, 1.0,
                                       by_foliage ? &foliage.may_own : nullptr)) {
       ++stats.not_clear;
-      return;
+      return m.count(EstimateOutcome::NotClear);
     }
+    m.count(EstimateOutcome::Estimated);
     stats.by_foliage += by_foliage;
     mesh.addEstimate(i, {static_cast<float>(h), static_cast<float>(distance), static_cast<float>(centre.z())},
                      cfg.max_estimates, cfg.fusion_quantile);

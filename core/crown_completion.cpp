@@ -69,6 +69,46 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
 
 }  // namespace
 
+const char* outcomeName(CrownOutcome outcome) {
+  switch (outcome) {
+    case CrownOutcome::Measured: return "measured";
+    case CrownOutcome::NoCrown: return "no_crown";
+    case CrownOutcome::TooShort: return "too_short";
+    case CrownOutcome::Unbounded: return "unbounded";
+    case CrownOutcome::OffCentre: return "off_centre";
+    case CrownOutcome::NearerTrunk: return "nearer_trunk";
+    case CrownOutcome::Implausible: return "implausible";
+    case CrownOutcome::NotClear: return "not_clear";
+    case CrownOutcome::NotAboveGround: return "not_above_ground";
+  }
+  return "unknown";
+}
+
+const char* verdictName(CrownVerdict verdict) {
+  switch (verdict) {
+    case CrownVerdict::NotApplied: return "not_applied";
+    case CrownVerdict::TooFewSamples: return "too_few_samples";
+    case CrownVerdict::NoBaseline: return "no_baseline";
+    case CrownVerdict::Disagree: return "disagree";
+    case CrownVerdict::TooNarrow: return "too_narrow";
+    case CrownVerdict::Raised: return "raised";
+  }
+  return "unknown";
+}
+
+std::vector<CrownRecord> CrownSampler::records() const {
+  std::vector<CrownRecord> out;
+  out.reserve(records_.size());
+  for (const auto& [key, r] : records_) out.push_back(r);
+  std::sort(out.begin(), out.end(), [](const CrownRecord& a, const CrownRecord& b) { return a.key < b.key; });
+  return out;
+}
+
+void CrownSampler::restoreRecords(const std::vector<CrownRecord>& records) {
+  records_.clear();
+  for (const CrownRecord& r : records) records_[r.key] = r;
+}
+
 bool parseCrownCue(const std::string& s, CrownConfig::Cue& out) {
   if (s == "foliage") return out = CrownConfig::Cue::Foliage, true;
   if (s == "sky") return out = CrownConfig::Cue::Sky, true;
@@ -129,6 +169,13 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     const Trunk& t = trunks[i];
     const int v = views[i].v;
     if (views[i].u < 0) continue;
+    CrownRecord& record = records_[t.key];
+    record.key = t.key;
+    record.centre = t.centre.cast<float>();
+    const auto count = [&record](CrownOutcome o) {
+      std::uint16_t& n = record.outcomes[static_cast<std::size_t>(o)];
+      n += n < 0xffff;
+    };
     // the crown's rows on the trunk's vertical: [top, bottom]
     int top = v, bottom = v - 1;
     if (foliage_cue) {
@@ -138,14 +185,19 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       while (row >= 0 && v - row <= gap && inside(column(i, row)) && !crown(column(i, row), row) &&
              !sky(column(i, row), row))
         --row;
-      if (row < 0 || v - row > gap || !inside(column(i, row)) || !crown(column(i, row), row))
-        continue;  // no crown above the bare trunk
+      if (row < 0 || v - row > gap || !inside(column(i, row)) || !crown(column(i, row), row)) {
+        count(CrownOutcome::NoCrown);  // no crown above the bare trunk
+        continue;
+      }
       bottom = row;
       top = row;
     }
     while (top - 1 >= 0 && inside(column(i, top - 1)) && crown(column(i, top - 1), top - 1)) --top;
     // cut off by the image top, or too little crown
-    if (top == 0 || bottom - top + 1 < cfg.min_height_px) continue;
+    if (top == 0 || bottom - top + 1 < cfg.min_height_px) {
+      count(CrownOutcome::TooShort);
+      continue;
+    }
     // the crown's runs around the vertical, row by row down from the top, while the cue bounds them
     // on both sides and neither end jumps outwards (something behind joining the crown): the widest,
     // and the crown's half width as the largest distance from the vertical to the nearer end of a
@@ -165,13 +217,19 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       half = std::max(half, std::min(u - left, right - u));
       prev_left = left, prev_right = right;
     }
-    if (widest == 0) continue;
+    if (widest == 0) {
+      count(CrownOutcome::Unbounded);
+      continue;
+    }
     // a crown stands over its trunk: a widest run centred away from the trunk's vertical is another
     // tree's crown, nearer or farther (the clear-line test knows only sensed objects, and crowns are
     // above the lidar's reach)
     const double run_centre = widest_left + 0.5 * (widest - 1);
     const int own = column(i, widest_row);
-    if (std::abs(run_centre - own) > cfg.max_offcentre * widest + 1.0) continue;
+    if (std::abs(run_centre - own) > cfg.max_offcentre * widest + 1.0) {
+      count(CrownOutcome::OffCentre);
+      continue;
+    }
     // of the trunks standing under the run (their tops below the crown's), the one nearest its
     // centre owns it
     bool nearer = false;
@@ -181,26 +239,38 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       nearer = other >= widest_left && other < widest_left + widest && views[j].v > top &&
                std::abs(other - run_centre) < std::abs(own - run_centre);
     }
-    if (nearer) continue;
+    if (nearer) {
+      count(CrownOutcome::NearerTrunk);
+      continue;
+    }
     const double radius = (half + 0.5) * views[i].depth / k.fx;
     const Vector3 dir =
         world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, top + 0.5), top + 0.5));
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
-    if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) continue;
+    if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) {
+      count(CrownOutcome::Implausible);
+      continue;
+    }
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
     const double reach = std::max(sky_cfg.max_distance, (t.centre - centre.head<2>()).norm() + cfg.max_radius);
     if (sky_cfg.clear_line &&
-        owners.otherMayOwn(centre, dir, reach, t.object, t.centre, 1.0, 1.0, foliage_cue ? &trunk_like : nullptr))
+        owners.otherMayOwn(centre, dir, reach, t.object, t.centre, 1.0, 1.0, foliage_cue ? &trunk_like : nullptr)) {
+      count(CrownOutcome::NotClear);
       continue;
+    }
     // one that does not stand above its ground is measured for no crown (but may own one above)
-    if (!standsAboveGround(t, mesh, map, cfg.min_trunk_height)) continue;
+    if (!standsAboveGround(t, mesh, map, cfg.min_trunk_height)) {
+      count(CrownOutcome::NotAboveGround);
+      continue;
+    }
+    count(CrownOutcome::Measured);
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
     ++measured;
   }
   return measured;
 }
 
-int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg) const {
+int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg) {
   if (!cfg.enabled || samples_.empty() || mesh.vertices().empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   auto& vertices = mesh.vertices();
@@ -209,12 +279,22 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   // only trunks with samples count: the wider limit lets in those that have grown since
   for (const Trunk& t : findTrunks(mesh, map, objects, std::max(cfg.max_trunk_width, cfg.max_grown_width))) {
     const auto it = samples_.find(t.key);
-    if (it == samples_.end() || static_cast<int>(it->second.size()) < std::max(1, cfg.min_samples)) continue;
+    const auto record = records_.find(t.key);
+    const auto judge = [&](CrownVerdict v) {
+      if (record != records_.end()) record->second.verdict = v;
+    };
+    if (it == samples_.end() || static_cast<int>(it->second.size()) < std::max(1, cfg.min_samples)) {
+      judge(CrownVerdict::TooFewSamples);
+      continue;
+    }
     // seen from far enough apart
     double baseline = 0;
     for (const Sample& a : it->second)
       baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
-    if (baseline < cfg.min_baseline || !standsAboveGround(t, mesh, map, cfg.min_trunk_height)) continue;
+    if (baseline < cfg.min_baseline || !standsAboveGround(t, mesh, map, cfg.min_trunk_height)) {
+      judge(CrownVerdict::NoBaseline);
+      continue;
+    }
     // the top: the median sample, if the samples agree (a taller crown behind the column in some
     // frames moves with parallax); the radius: the lower quartile (a run widened by a crown beside
     // it errs only upwards)
@@ -223,8 +303,15 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     std::sort(tops.begin(), tops.end());
     std::sort(radii.begin(), radii.end());
     const double top = tops[tops.size() / 2], r = radii[radii.size() / 4];
-    if (tops[tops.size() * 3 / 4] - tops[tops.size() / 4] > cfg.max_top_spread * top) continue;
-    if (r < cfg.min_radius) continue;
+    if (tops[tops.size() * 3 / 4] - tops[tops.size() / 4] > cfg.max_top_spread * top) {
+      judge(CrownVerdict::Disagree);
+      continue;
+    }
+    if (r < cfg.min_radius) {
+      judge(CrownVerdict::TooNarrow);
+      continue;
+    }
+    judge(CrownVerdict::Raised);
     // the ground vertices (and the trunk's own) within the radius: a spherical cap topped at `top`
     const int reach = static_cast<int>(std::ceil(r / cell));
     const CellIndex c0(static_cast<int>(std::floor(t.centre.x() / cell)),

@@ -22,6 +22,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <array>
 #include <unordered_map>
 #include <vector>
 
@@ -73,6 +74,43 @@ struct CrownConfig {
 // Parses "foliage"/"sky"; false if unknown.
 bool parseCrownCue(const std::string& s, CrownConfig::Cue& out);
 
+// What a frame made of a trunk in its image: a crown sample, or the reason it gave none.
+enum class CrownOutcome : std::uint8_t {
+  Measured,        // a sample
+  NoCrown,         // no crown pixel above the bare trunk within max_trunk_gap
+  TooShort,        // the crown cut off by the image top, or fewer than min_height_px rows
+  Unbounded,       // no run bounded by non-crown pixels on both sides
+  OffCentre,       // the widest run centred away from the trunk (max_offcentre)
+  NearerTrunk,     // another trunk stands under the run nearer its centre
+  Implausible,     // the top not above the trunk, or the radius past max_radius
+  NotClear,        // another object may own the crown's top pixel (clear-line test)
+  NotAboveGround,  // the trunk does not stand min_trunk_height above its ground
+};
+constexpr std::size_t kCrownOutcomes = 9;
+// What the end of the run made of a trunk's samples.
+enum class CrownVerdict : std::uint8_t {
+  NotApplied,     // not judged (the run did not end, or the trunk is no longer one)
+  TooFewSamples,  // fewer than min_samples
+  NoBaseline,     // the cameras closer than min_baseline, or the trunk not above its ground
+  Disagree,       // the tops spread more than max_top_spread
+  TooNarrow,      // the radius below min_radius
+  Raised,         // the ground under its crown raised
+};
+// names in reports: measured, no_crown, too_short, unbounded, off_centre, nearer_trunk,
+// implausible, not_clear, not_above_ground; not_applied, too_few_samples, no_baseline, disagree,
+// too_narrow, raised
+const char* outcomeName(CrownOutcome outcome);
+const char* verdictName(CrownVerdict verdict);
+
+// A trunk's record over the run: where it stands, frames per outcome (saturating at 65535) and the
+// verdict on its samples.
+struct CrownRecord {
+  std::uint32_t key = 0;  // the trunk's lowest vertex id
+  Eigen::Vector2f centre = Eigen::Vector2f::Zero();  // [m] where it stood when last seen
+  std::array<std::uint16_t, kCrownOutcomes> outcomes{};
+  CrownVerdict verdict = CrownVerdict::NotApplied;
+};
+
 // The crown samples of the trunks, gathered frame by frame.
 class CrownSampler {
  public:
@@ -91,10 +129,15 @@ class CrownSampler {
 
   // At the end of the run: raises the ground vertices under each trunk with min_samples samples
   // (MeshVertex::spread, as spreadEstimates does). Returns the number of vertices raised.
-  int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config) const;
+  // Sets each trunk record's verdict.
+  int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config);
 
   // trunks with samples
   std::size_t trunks() const { return samples_.size(); }
+  // every trunk a frame looked at, by key
+  std::vector<CrownRecord> records() const;
+  // Replaces the records (a saved run read back); the samples stay as they are.
+  void restoreRecords(const std::vector<CrownRecord>& records);
 
  private:
   struct Sample {
@@ -103,6 +146,7 @@ class CrownSampler {
     Eigen::Vector2f camera;  // [m] where the camera was (x, y)
   };
   std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id
+  std::unordered_map<std::uint32_t, CrownRecord> records_;           // by the same key
 };
 
 }  // namespace terrain

@@ -113,7 +113,7 @@ void Pipeline::finish() {
 }
 
 bool Pipeline::restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertices, SegmentationResult segmentation,
-                       std::vector<FrameRecord> records) {
+                       std::vector<FrameRecord> records, const std::vector<CrownRecord>& crowns) {
   const std::size_t n = voxels.size();
   if (segmentation.rough.size() != n || segmentation.refined.size() != n || segmentation.ground_height.size() != n)
     return false;
@@ -124,6 +124,7 @@ bool Pipeline::restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertic
   if (!mesh_.restore(std::move(vertices))) return false;
   segmentation_ = std::move(segmentation);
   records_ = std::move(records);
+  crowns_.restoreRecords(crowns);
   held_.clear();
   dirty_ = false;
   completeFootprints();

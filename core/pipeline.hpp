@@ -58,6 +58,8 @@ class Pipeline {
   // the building footprints completed at finish() (footprint completion) and their roof cells
   const std::vector<Footprint>& footprints() const { return footprints_; }
   const std::vector<RoofCell>& roofCells() const { return roof_cells_; }
+  // what crown completion made of every trunk a frame looked at (by trunk key)
+  std::vector<CrownRecord> crownRecords() const { return crowns_.records(); }
   const std::vector<FrameRecord>& records() const { return records_; }
   const std::vector<std::string>& warnings() const { return warnings_; }
   const PoseEstimator& poses() const { return poses_; }
@@ -67,7 +69,7 @@ class Pipeline {
   // Returns false if the voxels or mesh vertices are inconsistent (duplicates, labels not one per
   // voxel, a vertex's top voxel out of range).
   bool restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertices, SegmentationResult segmentation,
-               std::vector<FrameRecord> records);
+               std::vector<FrameRecord> records, const std::vector<CrownRecord>& crowns = {});
 
   // the last frame's boundary images (empty if it had no image)
   const BoundaryImages& lastBoundaries() const { return last_boundaries_; }

@@ -21,6 +21,22 @@ struct HeightEstimate {
   float camera_height = 0;  // [m]
 };
 
+// What boundary estimation made of a vertex in one frame whose image it fell in: an estimate, or the
+// reason it gave none (see estimateBoundaries).
+enum class EstimateOutcome : std::uint8_t {
+  Estimated,      // a height estimate
+  NoTopBoundary,  // no boundary pixel above it on its vertical
+  CutOff,         // its top (boundary or foliage run) at the image's top margin
+  NoSky,          // no sky just above its top boundary (sky test)
+  EndsBelow,      // its pixels end against sky below its top boundary
+  Implausible,    // the height is not above its sensed top, or too far above (max_height)
+  NotClear,       // another object may own its top pixel (clear-line test)
+};
+constexpr std::size_t kEstimateOutcomes = 7;
+// the outcome's name in reports: estimated, no_top_boundary, cut_off, no_sky, ends_below,
+// implausible, not_clear
+const char* outcomeName(EstimateOutcome outcome);
+
 struct MeshVertex {
   CellIndex cell;
   std::uint32_t top_voxel = 0;            // voxel id of the column's top
@@ -34,7 +50,13 @@ struct MeshVertex {
   // same object (spreadEstimates), its completed footprint's roof (roofWalls) or a tree crown over
   // it (CrownSampler::apply)
   bool spread = false;
+  // frames per outcome of boundary estimation (saturating at 65535): why a vertex was or was not raised
+  std::array<std::uint16_t, kEstimateOutcomes> outcomes{};
 
+  void count(EstimateOutcome o) {
+    std::uint16_t& n = outcomes[static_cast<std::size_t>(o)];
+    n += n < 0xffff;
+  }
   // has estimates of its own that stand
   bool estimated() const { return !estimates.empty() && !parallax; }
   // raised by boundary estimation, from its own estimates or its object's

@@ -227,6 +227,29 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       std::vector<double> e_before, e_after;
     };
     std::map<std::string, Sum> sums = {{"building", {}}, {"tree", {}}};
+    // per tree: the records of the trunks crown completion looked at within 1.5 m of its centre (a
+    // trunk whose object changed as it grew has several), their outcomes summed and the verdict
+    // that got furthest
+    struct TreeCrown {
+      std::size_t records = 0;
+      std::array<std::uint64_t, kCrownOutcomes> outcomes{};
+      CrownVerdict verdict = CrownVerdict::NotApplied;
+    };
+    std::map<std::string, TreeCrown> crown_of;
+    const std::vector<CrownRecord> crowns = pipeline.crownRecords();
+    for (const auto& o : world.truth().objects) {
+      if (o.object_class == scenes::GeomClass::Building || o.footprint.empty()) continue;
+      Eigen::Vector2d c = Eigen::Vector2d::Zero();
+      for (const auto& q : o.footprint) c += q;
+      c /= static_cast<double>(o.footprint.size());
+      for (const auto& rec : crowns) {
+        if ((rec.centre.cast<double>() - c).norm() > 1.5) continue;
+        TreeCrown& tc = crown_of[o.id];
+        ++tc.records;
+        for (std::size_t k = 0; k < kCrownOutcomes; ++k) tc.outcomes[k] += rec.outcomes[k];
+        tc.verdict = std::max(tc.verdict, rec.verdict);
+      }
+    }
     for (const auto& [id, t] : h.tops) {
       const auto it = seen.find(id);
       if (it == seen.end()) continue;
@@ -237,9 +260,20 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       ++s.seen;
       s.before += std::abs(eb) <= tol, s.after += std::abs(ea) <= tol;
       s.e_before.push_back(eb), s.e_after.push_back(ea);
+      json outcomes = json::object();
+      for (std::size_t k = 0; k < kEstimateOutcomes; ++k) outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = t.outcomes[k];
       list[id] = {{"class", t.building ? "building" : "tree"}, {"true_top_m", t.top}, {"sensed_top_m", t.sensed},
                   {"recovered_top_m", t.recovered}, {"error_m", ea}, {"tolerance_m", tol},
-                  {"frames_top_seen", it->second}, {"cells", t.cells}};
+                  {"frames_top_seen", it->second}, {"cells", t.cells}, {"estimation_outcomes", outcomes}};
+      if (!t.building) {
+        json& crown = list[id]["crown"];
+        if (const auto tc = crown_of.find(id); tc != crown_of.end()) {
+          json counts = json::object();
+          for (std::size_t k = 0; k < kCrownOutcomes; ++k)
+            counts[outcomeName(static_cast<CrownOutcome>(k))] = tc->second.outcomes[k];
+          crown = {{"trunk_records", tc->second.records}, {"outcomes", counts}, {"verdict", verdictName(tc->second.verdict)}};
+        }
+      }
     }
     for (const auto& [kind, s] : sums) {
       tops[kind] = {{"top_seen", s.seen}, {"at_height_before", s.before}, {"at_height_after", s.after},

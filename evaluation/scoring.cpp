@@ -66,8 +66,9 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
   for (const auto& o : world.truth().objects) {
     for (const auto& g : o.geoms) owner[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = o.id;
   }
-  // per object: the heights of its cells, sensed and recovered
+  // per object: the heights of its cells, sensed and recovered, and their estimation outcomes
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> heights;
+  std::map<std::string, std::array<std::uint64_t, kEstimateOutcomes>> outcomes;
   for (const auto& v : mesh.vertices()) {
     const double x = (v.cell.x() + 0.5) * voxel_size, y = (v.cell.y() + 0.5) * voxel_size;
     const CellTruth t = cellTruth(world, x, y, voxel_size);
@@ -104,6 +105,8 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
       out.in_view_by_object[it->second] += in_view;
       heights[it->second].first.push_back(v.sensed_height);
       heights[it->second].second.push_back(v.height());
+      auto& sum = outcomes[it->second];
+      for (std::size_t k = 0; k < kEstimateOutcomes; ++k) sum[k] += v.outcomes[k];
     }
   }
   for (const auto& r : roof) {
@@ -120,6 +123,7 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
     top.cells = it->second.second.size();
     top.sensed = top95(it->second.first);
     top.recovered = top95(it->second.second);
+    if (const auto oc = outcomes.find(o.id); oc != outcomes.end()) top.outcomes = oc->second;
   }
   out.before = errorStats(before);
   out.after = errorStats(after);

@@ -7,6 +7,7 @@
 #include "evaluation/ground_truth.hpp"
 #include "evaluation/metrics.hpp"
 
+#include <array>
 #include <limits>
 #include <map>
 #include <string>
@@ -31,6 +32,8 @@ struct ObjectTop {
   double sensed = std::numeric_limits<double>::quiet_NaN();     // [m] sensed heights only
   double recovered = std::numeric_limits<double>::quiet_NaN();  // [m] after recovery
   std::size_t cells = 0;  // mesh vertices and roof cells whose true top is the object
+  // boundary estimation's outcomes over the object's mesh vertices: vertex-frames per outcome
+  std::array<std::uint64_t, kEstimateOutcomes> outcomes{};
 };
 
 // The tolerance [m] within which a recovered top counts as the object's real height: 10 % of its

@@ -228,7 +228,25 @@ TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
     const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, rgb);
     EXPECT_EQ(stats.estimated, sky ? 1 : 0);
     EXPECT_EQ(stats.no_sky, sky ? 0 : 1);
+    // the vertex keeps the frame's outcome
+    const auto& outcomes = mesh.vertices()[0].outcomes;
+    EXPECT_EQ(outcomes[static_cast<std::size_t>(EstimateOutcome::Estimated)], sky ? 1 : 0);
+    EXPECT_EQ(outcomes[static_cast<std::size_t>(EstimateOutcome::NoSky)], sky ? 0 : 1);
+    int total = 0;
+    for (std::uint16_t n : outcomes) total += n;
+    EXPECT_EQ(total, 1);
   }
+  // an empty boundary image: no top boundary on the vertex's vertical, frame after frame
+  TerrainMesh mesh;
+  mesh.update(map, {0});
+  const cv::Mat none = cv::Mat::zeros(480, 640, CV_8UC1);
+  for (int frame = 0; frame < 3; ++frame) estimateBoundaries(mesh, map, none, k, world_from_camera, BoundaryEstimationConfig{});
+  EXPECT_EQ(mesh.vertices()[0].outcomes[static_cast<std::size_t>(EstimateOutcome::NoTopBoundary)], 3);
+  EXPECT_STREQ(outcomeName(EstimateOutcome::NoTopBoundary), "no_top_boundary");
+  MeshVertex full;
+  full.outcomes[0] = 0xffff;
+  full.count(EstimateOutcome::Estimated);
+  EXPECT_EQ(full.outcomes[0], 0xffff);  // saturates
 }
 
 // A wall top 12 m high at (3, 20) seen from the origin looking north, and a second object B on the
@@ -258,6 +276,8 @@ TEST(BoundaryEstimationTest, ClearLineSkipsATopThatAnotherObjectMayOwn) {
     cfg.clear_line = c.clear_line;
     estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg);
     EXPECT_EQ(static_cast<int>(mesh.vertices()[a].estimates.size()), c.estimated)
+        << "clear_line " << c.clear_line << ", B's top " << c.b_top;
+    EXPECT_EQ(mesh.vertices()[a].outcomes[static_cast<std::size_t>(EstimateOutcome::NotClear)], 1 - c.estimated)
         << "clear_line " << c.clear_line << ", B's top " << c.b_top;
   }
 }

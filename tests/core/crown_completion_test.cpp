@@ -118,11 +118,29 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
     EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
   }
   EXPECT_EQ(sampler.trunks(), 1u);
+  // the trunk's record: three frames, each a sample, not judged yet
+  ASSERT_EQ(sampler.records().size(), 1u);
+  EXPECT_EQ(sampler.records()[0].outcomes[static_cast<std::size_t>(CrownOutcome::Measured)], 3);
+  EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::NotApplied);
   // seen from one spot only: a crown behind the column could not have shown itself, nothing raised
   EXPECT_EQ(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::NoBaseline);
   // (the same image stands for views along a baseline here)
   cfg.min_baseline = 0;
   EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+  EXPECT_STREQ(verdictName(CrownVerdict::Raised), "raised");
+  // a frame of sky only: the trunk is seen, but no crown above it
+  const cv::Mat sky(rgb.size(), rgb.type(), cv::Scalar(120, 160, 230));
+  EXPECT_EQ(sampler.measure(tree.mesh, tree.map, sky, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 0);
+  EXPECT_EQ(sampler.records()[0].outcomes[static_cast<std::size_t>(CrownOutcome::NoCrown)], 1);
+  EXPECT_STREQ(outcomeName(CrownOutcome::NoCrown), "no_crown");
+  // records read back replace the sampler's
+  CrownSampler other;
+  other.restoreRecords(sampler.records());
+  ASSERT_EQ(other.records().size(), 1u);
+  EXPECT_EQ(other.records()[0].outcomes, sampler.records()[0].outcomes);
+  EXPECT_EQ(other.records()[0].verdict, CrownVerdict::Raised);
   tree.expectCap();
   // the trunk, without an estimate of its own, is under the crown too
   EXPECT_NEAR(tree.at(0, 100).height(), 11.0, 0.15);
