@@ -89,6 +89,7 @@ const char* verdictName(CrownVerdict verdict) {
     case CrownVerdict::NotApplied: return "not_applied";
     case CrownVerdict::TooFewSamples: return "too_few_samples";
     case CrownVerdict::NoBaseline: return "no_baseline";
+    case CrownVerdict::Sunk: return "sunk";
     case CrownVerdict::Disagree: return "disagree";
     case CrownVerdict::TooNarrow: return "too_narrow";
     case CrownVerdict::Raised: return "raised";
@@ -291,8 +292,12 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     double baseline = 0;
     for (const Sample& a : it->second)
       baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
-    if (baseline < cfg.min_baseline || !standsAboveGround(t, mesh, map, cfg.min_trunk_height)) {
+    if (baseline < cfg.min_baseline) {
       judge(CrownVerdict::NoBaseline);
+      continue;
+    }
+    if (!standsAboveGround(t, mesh, map, cfg.min_trunk_height)) {
+      judge(CrownVerdict::Sunk);
       continue;
     }
     // the top: the median sample, if the samples agree (a taller crown behind the column in some
