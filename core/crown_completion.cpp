@@ -265,7 +265,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       continue;
     }
     count(CrownOutcome::Measured);
-    samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>()});
+    samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>(),
+                               t.centre.cast<float>()});
     ++measured;
   }
   return measured;
@@ -278,20 +279,49 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   const double cell = map.voxelSize();
   int raised = 0;
   // only trunks with samples count: the wider limit lets in those that have grown since
-  for (const Trunk& t : findTrunks(mesh, map, objects, std::max(cfg.max_trunk_width, cfg.max_grown_width))) {
-    const auto it = samples_.find(t.key);
-    const auto record = records_.find(t.key);
+  const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, std::max(cfg.max_trunk_width, cfg.max_grown_width));
+  // each key's samples go to the trunk of that key, else to the trunk nearest their last sample's
+  // trunk position within 1 m; keys in order, so that the merged samples' order is fixed
+  std::unordered_map<std::uint32_t, std::size_t> trunk_of_key;
+  for (std::size_t i = 0; i < trunks.size(); ++i) trunk_of_key[trunks[i].key] = i;
+  std::vector<std::uint32_t> keys;
+  for (const auto& [key, list] : samples_) keys.push_back(key);
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::vector<Sample>> merged(trunks.size());
+  std::vector<std::vector<std::uint32_t>> merged_keys(trunks.size());
+  for (std::uint32_t key : keys) {
+    const std::vector<Sample>& list = samples_.at(key);
+    std::size_t to = trunks.size();
+    if (const auto own = trunk_of_key.find(key); own != trunk_of_key.end()) {
+      to = own->second;
+    } else {
+      double best = 1.0;
+      for (std::size_t i = 0; i < trunks.size(); ++i) {
+        const double d = (trunks[i].centre - list.back().trunk.cast<double>()).norm();
+        if (d <= best) best = d, to = i;
+      }
+    }
+    if (to == trunks.size()) continue;
+    merged[to].insert(merged[to].end(), list.begin(), list.end());
+    merged_keys[to].push_back(key);
+  }
+  for (std::size_t ti = 0; ti < trunks.size(); ++ti) {
+    const Trunk& t = trunks[ti];
+    const std::vector<Sample>& samples = merged[ti];
     const auto judge = [&](CrownVerdict v) {
-      if (record != records_.end()) record->second.verdict = v;
+      for (std::uint32_t key : merged_keys[ti]) {
+        if (const auto record = records_.find(key); record != records_.end()) record->second.verdict = v;
+      }
+      if (const auto record = records_.find(t.key); record != records_.end()) record->second.verdict = v;
     };
-    if (it == samples_.end() || static_cast<int>(it->second.size()) < std::max(1, cfg.min_samples)) {
+    if (static_cast<int>(samples.size()) < std::max(1, cfg.min_samples)) {
       judge(CrownVerdict::TooFewSamples);
       continue;
     }
     // seen from far enough apart
     double baseline = 0;
-    for (const Sample& a : it->second)
-      baseline = std::max(baseline, static_cast<double>((a.camera - it->second.front().camera).norm()));
+    for (const Sample& a : samples)
+      baseline = std::max(baseline, static_cast<double>((a.camera - samples.front().camera).norm()));
     if (baseline < cfg.min_baseline) {
       judge(CrownVerdict::NoBaseline);
       continue;
@@ -304,7 +334,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     // frames moves with parallax); the radius: the lower quartile (a run widened by a crown beside
     // it errs only upwards)
     std::vector<float> tops, radii;
-    for (const Sample& s : it->second) tops.push_back(s.top), radii.push_back(s.radius);
+    for (const Sample& s : samples) tops.push_back(s.top), radii.push_back(s.radius);
     std::sort(tops.begin(), tops.end());
     std::sort(radii.begin(), radii.end());
     const double top = tops[tops.size() / 2], r = radii[radii.size() / 4];

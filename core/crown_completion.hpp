@@ -134,7 +134,10 @@ class CrownSampler {
   static double ownersReach(const CrownConfig& config, const BoundaryEstimationConfig& estimation);
 
   // At the end of the run: raises the ground vertices under each trunk with min_samples samples
-  // (MeshVertex::spread, as spreadEstimates does). Returns the number of vertices raised.
+  // (MeshVertex::spread, as spreadEstimates does). Returns the number of vertices raised. A trunk
+  // whose object changed as the map grew (another lowest vertex) left samples under its old key:
+  // samples go to the trunk of their key, else to the trunk nearest where they were taken, within
+  // 1 m.
   // Sets each trunk record's verdict.
   int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config);
 
@@ -150,6 +153,7 @@ class CrownSampler {
     float top = 0;           // [m] crown top height
     float radius = 0;        // [m]
     Eigen::Vector2f camera;  // [m] where the camera was (x, y)
+    Eigen::Vector2f trunk;   // [m] where the trunk stood (x, y)
   };
   std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id
   std::unordered_map<std::uint32_t, CrownRecord> records_;           // by the same key
