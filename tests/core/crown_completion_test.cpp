@@ -104,6 +104,26 @@ struct Tree {
   }
 };
 
+// The trunk's object takes in an older vertex after it was measured (a return beside it relabels the
+// ground there): its key, the object's lowest vertex id, changes; its samples still count.
+TEST(CrownCompletionTest, SamplesFollowATrunkWhoseObjectTookAnotherKey) {
+  Tree tree;
+  CrownSampler sampler;
+  const cv::Mat rgb = tree.image();
+  CrownConfig cfg;
+  cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+  for (int frame = 0; frame < 3; ++frame)
+    ASSERT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+  const std::int64_t beside = tree.mesh.find(CellIndex(-1, 100)), trunk = tree.mesh.find(CellIndex(0, 100));
+  ASSERT_GE(beside, 0);
+  ASSERT_LT(beside, trunk);  // older: the object's lowest vertex from now on
+  tree.map.voxels()[tree.mesh.vertices()[beside].top_voxel].label = VoxelLabel::NonGround;
+  EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  tree.expectCap();
+  // both keys' records carry the verdict
+  for (const CrownRecord& r : sampler.records()) EXPECT_EQ(r.verdict, CrownVerdict::Raised) << r.key;
+}
+
 TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalCap) {
   Tree tree;
   CrownSampler sampler;
