@@ -143,7 +143,6 @@ bool looksLikeSky(const cv::Vec3b& c, int blue_margin, int min_brightness) {
   return b >= r + blue_margin && b >= g && (r + g + b) / 3 >= min_brightness;
 }
 
-
 bool showsParallax(const std::vector<HeightEstimate>& estimates, double slope, double change, double min_gap,
                    double max_gap, double min_t) {
   if (!(slope > 0) || estimates.size() < kParallaxEstimates) return false;

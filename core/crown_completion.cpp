@@ -173,10 +173,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     CrownRecord& record = records_[t.key];
     record.key = t.key;
     record.centre = t.centre.cast<float>();
-    const auto count = [&record](CrownOutcome o) {
-      std::uint16_t& n = record.outcomes[static_cast<std::size_t>(o)];
-      n += n < 0xffff;
-    };
+    const auto count = [&record](CrownOutcome o) { countUp(record.outcomes[static_cast<std::size_t>(o)]); };
     // the crown's rows on the trunk's vertical: [top, bottom]
     int top = v, bottom = v - 1;
     if (foliage_cue) {

@@ -37,6 +37,9 @@ constexpr std::size_t kEstimateOutcomes = 7;
 // implausible, not_clear
 const char* outcomeName(EstimateOutcome outcome);
 
+// one more in a count that stops at its largest value
+inline void countUp(std::uint16_t& n) { n += n < 0xffff; }
+
 struct MeshVertex {
   CellIndex cell;
   std::uint32_t top_voxel = 0;            // voxel id of the column's top
@@ -53,10 +56,7 @@ struct MeshVertex {
   // frames per outcome of boundary estimation (saturating at 65535): why a vertex was or was not raised
   std::array<std::uint16_t, kEstimateOutcomes> outcomes{};
 
-  void count(EstimateOutcome o) {
-    std::uint16_t& n = outcomes[static_cast<std::size_t>(o)];
-    n += n < 0xffff;
-  }
+  void count(EstimateOutcome o) { countUp(outcomes[static_cast<std::size_t>(o)]); }
   // has estimates of its own that stand
   bool estimated() const { return !estimates.empty() && !parallax; }
   // raised by boundary estimation, from its own estimates or its object's
