@@ -263,7 +263,7 @@ SavedRun readRunState(const fs::path& out) {
   p.end();
   run.pipeline = std::make_unique<Pipeline>(calibration, config);
   if (!run.pipeline->restore(std::move(voxels), std::move(vertices), std::move(s), std::move(records), crowns)) {
-    p.fail("voxels, mesh and labels do not fit together (duplicate voxels or cells, labels not one per voxel, or a vertex's top voxel out of range)");
+    p.fail("voxels, mesh and labels do not fit together (duplicate voxels or cells, a voxel index beyond +-1 M, labels not one per voxel, or a vertex's top voxel out of range)");
   }
 
   // the truth

@@ -299,6 +299,28 @@ struct Plane {
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 int floorMod(int a, int b) { return a - floorDiv(a, b) * b; }
 
+// floor((a - base) / k) for a fixed k >= 1 and a in [base, base + 2^23): a multiply and a shift
+// in place of a division. With 2^l >= k and m = ceil(2^(23 + l) / k), (n m) >> (23 + l) is
+// floor(n / k) for every 0 <= n < 2^23 (the rounding up of m adds less than 2^-l <= 1/k to n / k).
+// A map's voxel indices span less than 2^21 (VoxelMap keeps them within +-2^20).
+class OffsetDivider {
+ public:
+  OffsetDivider() = default;
+  OffsetDivider(int base, int k) : base_(base) {
+    int l = 0;
+    while ((std::uint64_t{1} << l) < static_cast<std::uint64_t>(k)) ++l;
+    shift_ = 23 + l;
+    mul_ = ((std::uint64_t{1} << shift_) + static_cast<std::uint64_t>(k) - 1) / static_cast<std::uint64_t>(k);
+  }
+  int operator()(int a) const {
+    return static_cast<int>((static_cast<std::uint64_t>(static_cast<std::uint32_t>(a - base_)) * mul_) >> shift_);
+  }
+
+ private:
+  int base_ = 0, shift_ = 0;
+  std::uint64_t mul_ = 0;
+};
+
 // sums of a point set, relative to a reference point near it, for least squares in one pass
 struct Moments {
   double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0;
@@ -471,29 +493,16 @@ class TileLayout {
   struct Tile {
     int tx = 0, ty = 0;
   };
-  // Every voxel of the map, in the tiles it covers (in row-major tile order).
-  void build(const std::vector<Voxel>& voxels, int k) {
+  // Every voxel of the map, in the tiles it covers (in row-major tile order). The tiles' extent
+  // comes from the map's index extent, so that the voxels are read only to group them.
+  void build(const VoxelMap& map, int k) {
     clear(k);
+    const std::vector<Voxel>& voxels = map.voxels();
     if (voxels.empty()) return;
-    // each voxel's tile, and the tiles' extent (over fixed chunks of voxels)
-    const std::size_t n = voxels.size();
-    tile_of_.resize(n);
-    std::vector<std::array<int, 4>> extent(kChunks, {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
-                                                     std::numeric_limits<int>::min(), std::numeric_limits<int>::min()});
-    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
-      auto [x0, y0, x1, y1] = extent[c];
-      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
-        const Tile t{floorDiv(voxels[i].index.x(), k), floorDiv(voxels[i].index.y(), k)};
-        tile_of_[i] = t;
-        x0 = std::min(x0, t.tx), y0 = std::min(y0, t.ty), x1 = std::max(x1, t.tx), y1 = std::max(y1, t.ty);
-      }
-      extent[c] = {x0, y0, x1, y1};
-    });
-    for (std::size_t c = 1; c < kChunks; ++c) {
-      extent[0][0] = std::min(extent[0][0], extent[c][0]), extent[0][1] = std::min(extent[0][1], extent[c][1]);
-      extent[0][2] = std::max(extent[0][2], extent[c][2]), extent[0][3] = std::max(extent[0][3], extent[c][3]);
-    }
-    setGrid(extent[0][0], extent[0][1], extent[0][2], extent[0][3], n);
+    const VoxelIndex& lo = map.lowestIndex();
+    const VoxelIndex& hi = map.highestIndex();
+    setGrid(floorDiv(lo.x(), k), floorDiv(lo.y(), k), floorDiv(hi.x(), k), floorDiv(hi.y(), k), voxels.size());
+    tile_x_ = OffsetDivider(gx0_ * k, k), tile_y_ = OffsetDivider(gy0_ * k, k);
     if (!grid_.empty()) {
       groupDense(voxels);
     } else {
@@ -629,8 +638,10 @@ class TileLayout {
     offset.assign(chunks * cells, 0);
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
       std::uint32_t* count = offset.data() + c * cells;
-      for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i)
-        ++count[gridCell(tile_of_[i].tx, tile_of_[i].ty)];
+      for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
+        const Tile t = tileOf(voxels[i]);
+        ++count[gridCell(t.tx, t.ty)];
+      }
     });
     std::uint32_t placed = 0;
     for (std::size_t cell = 0; cell < cells; ++cell) {
@@ -650,7 +661,7 @@ class TileLayout {
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
       std::uint32_t* fill = offset.data() + c * cells;
       for (std::size_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
-        const Tile t = tile_of_[i];
+        const Tile t = tileOf(voxels[i]);
         place(fill[gridCell(t.tx, t.ty)]++, static_cast<std::uint32_t>(i), voxels[i], t);
       }
     });
@@ -664,13 +675,14 @@ class TileLayout {
     const std::size_t n = voxels.size();
     std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      keyed[i] = {gridCell(tile_of_[i].tx, tile_of_[i].ty), static_cast<std::uint32_t>(i)};
+      const Tile t = tileOf(voxels[i]);
+      keyed[i] = {gridCell(t.tx, t.ty), static_cast<std::uint32_t>(i)};
     });
     std::sort(keyed.begin(), keyed.end());
     resizePositions(n);
     for (std::size_t j = 0; j < n; ++j) {
       const std::uint32_t i = keyed[j].second;
-      place(j, i, voxels[i], tile_of_[i]);
+      place(j, i, voxels[i], tileOf(voxels[i]));
       if (j > 0 && keyed[j].first == keyed[j - 1].first) continue;
       const std::uint64_t c = keyed[j].first;
       setTile(c, tiles_.size());
@@ -700,6 +712,9 @@ class TileLayout {
       sparse_[cell] = static_cast<std::int32_t>(t);
     }
   }
+
+  // the tile of a voxel of the map being built
+  Tile tileOf(const Voxel& v) const { return {gx0_ + tile_x_(v.index.x()), gy0_ + tile_y_(v.index.y())}; }
 
   void resizePositions(std::size_t n) {
     ids_.resize(n), z_.resize(n), height_.resize(n), local_.resize(n);
@@ -768,6 +783,7 @@ class TileLayout {
 
   int k_ = 1;
   int gx0_ = 0, gy0_ = 0, nx_ = 0, ny_ = 0;                 // the grid of tiles over the layout's extent
+  OffsetDivider tile_x_, tile_y_;                           // a voxel index's tile offset in the grid (whole map)
   std::vector<std::int32_t> grid_;                          // per grid cell: index in tiles_, or -1 (empty if sparse)
   std::unordered_map<std::uint64_t, std::int32_t> sparse_;  // grid cell -> index in tiles_, if sparse
   std::vector<Tile> tiles_;
@@ -778,7 +794,6 @@ class TileLayout {
   std::vector<std::uint32_t> local_;    // voxel column in its tile per position (while grouping)
   std::vector<float> range_;            // per tile: its lowest and highest voxel height [m]
   std::vector<std::uint32_t> first_;    // per tile and one past the last: its first position
-  std::vector<Tile> tile_of_;           // per voxel: its tile (while grouping)
   std::vector<std::uint32_t> scratch_;  // per chunk of voxels and grid cell: counts, then offsets (while grouping)
 };
 
@@ -929,7 +944,7 @@ void segmentWhole(const VoxelMap& map, const GroundSegmentationConfig& cfg, Work
   const bool global = cfg.histogram == GroundSegmentationConfig::Histogram::Global;
   tbb::task_arena arena = arenaFor(cfg.threads);
   arena.execute([&] {
-    ws.layout.build(voxels, k);
+    ws.layout.build(map, k);
     const std::size_t tiles = ws.layout.tiles().size();
     // h1: one plane per tile, fitted through the plane-fit candidates of the tiles in its window
     // and lifted to the peak of the window's heights above it; or one level for the whole map

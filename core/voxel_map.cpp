@@ -56,6 +56,20 @@ void VoxelMap::grow() {
 bool VoxelMap::restore(std::vector<Voxel> voxels) {
   voxels_ = std::move(voxels);
   new_voxels_.clear();
+  const auto reject = [this] {
+    voxels_.clear();
+    slots_.assign(1 << 16, kEmpty);
+    lowest_ = highest_ = VoxelIndex::Zero();
+    return false;
+  };
+  lowest_ = highest_ = voxels_.empty() ? VoxelIndex::Zero() : voxels_[0].index;
+  for (const Voxel& v : voxels_) {
+    // the indices insert can create
+    for (int a = 0; a < 3; ++a) {
+      if (v.index[a] < -(kOffset - 1) || v.index[a] > kOffset - 1) return reject();
+    }
+    lowest_ = lowest_.cwiseMin(v.index), highest_ = highest_.cwiseMax(v.index);
+  }
   std::size_t n = 1 << 16;
   while (n < 2 * (voxels_.size() + 1)) n *= 2;
   slots_.assign(n, kEmpty);
@@ -63,11 +77,7 @@ bool VoxelMap::restore(std::vector<Voxel> voxels) {
   for (std::uint32_t id = 0; id < voxels_.size(); ++id) {
     std::size_t t = hashKey(pack(voxels_[id].index)) & mask;
     while (slots_[t] != kEmpty) {
-      if (voxels_[slots_[t]].index == voxels_[id].index) {
-        voxels_.clear();
-        slots_.assign(1 << 16, kEmpty);
-        return false;
-      }
+      if (voxels_[slots_[t]].index == voxels_[id].index) return reject();
       t = (t + 1) & mask;
     }
     slots_[t] = id;
@@ -91,6 +101,8 @@ std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t fr
     while (slots_[s] != kEmpty && voxels_[slots_[s]].index != index) s = (s + 1) & mask;
     if (slots_[s] == kEmpty) {
       slots_[s] = static_cast<std::uint32_t>(voxels_.size());
+      if (voxels_.empty()) lowest_ = highest_ = index;
+      lowest_ = lowest_.cwiseMin(index), highest_ = highest_.cwiseMax(index);
       Voxel v;
       v.index = index;
       voxels_.push_back(v);

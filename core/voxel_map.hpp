@@ -44,6 +44,10 @@ class VoxelMap {
   // Voxel id of an index, or -1 if the voxel is empty.
   std::int64_t find(const VoxelIndex& index) const;
   const std::vector<Voxel>& voxels() const { return voxels_; }
+  // The smallest and the largest index along each axis over the map's voxels (both zero while the
+  // map is empty), kept as voxels are created.
+  const VoxelIndex& lowestIndex() const { return lowest_; }
+  const VoxelIndex& highestIndex() const { return highest_; }
   std::vector<Voxel>& voxels() { return voxels_; }
   std::size_t size() const { return voxels_.size(); }
   // ids of voxels created since the last call
@@ -54,7 +58,7 @@ class VoxelMap {
   Point3 centreOf(const VoxelIndex& index) const;
 
   // Replaces the map's content with these voxels (a saved map read back). Returns false, leaving
-  // the map empty, if two voxels share an index.
+  // the map empty, if two voxels share an index or one lies beyond the +-1 M voxels insert keeps.
   bool restore(std::vector<Voxel> voxels);
 
   // Bytes used by the map's own storage.
@@ -68,6 +72,7 @@ class VoxelMap {
 
   double size_;
   std::vector<Voxel> voxels_;
+  VoxelIndex lowest_ = VoxelIndex::Zero(), highest_ = VoxelIndex::Zero();
   static constexpr std::uint32_t kEmpty = 0xffffffffu;
   std::vector<std::uint32_t> slots_;  // open-addressing hash table of voxel ids; the key is the voxel's index
   std::vector<std::uint32_t> new_voxels_;

@@ -331,6 +331,37 @@ TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentation) {
   }
 }
 
+// The same strips across the origin, off the tile grid: the whole-map segmentation groups voxels
+// into tiles from the map's index extent, the incremental one tile by tile as points arrive; both
+// put every voxel in the same tile, so their ground heights and rough classes agree exactly.
+TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentationAcrossTheOrigin) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  GroundSegmentationConfig cfg;
+  IncrementalGroundSegmentation inc(cfg);
+  for (auto strip : strips()) {
+    for (auto& p : strip) p += Point3(-61.3, -17.1, 0);
+    map.insert(strip, 0);
+    inc.touch(strip, map.voxelSize());
+    inc.update(map);
+  }
+  ASSERT_LT(map.lowestIndex().x(), 0);
+  ASSERT_LT(map.lowestIndex().y(), 0);
+  ASSERT_GT(map.highestIndex().x(), 0);
+  ASSERT_GT(map.highestIndex().y(), 0);
+  const SegmentationResult whole = segmentGroundLabels(map, cfg);
+  const SegmentationResult& part = inc.result();
+  ASSERT_EQ(part.refined.size(), map.size());
+  // x from -61.2 to 58.6 m and y from -17.0 to 42.8 m: 21 x 11 tiles of 6 m
+  EXPECT_EQ(whole.tiles, 21 * 11);
+  std::size_t same_height = 0, same_rough = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    same_height += part.ground_height[i] == whole.ground_height[i];
+    same_rough += part.rough[i] == whole.rough[i];
+  }
+  EXPECT_EQ(same_height, map.size());
+  EXPECT_EQ(same_rough, map.size());
+}
+
 // the whole-map segmentation, every stage parallel over tiles or nodes, with either solver
 TEST(GroundSegmentationTest, SameResultWhateverTheThreadCount) {
   VoxelMap map(VoxelMapConfig{0.2});
