@@ -1010,7 +1010,8 @@ std::uint64_t tileKey(int tx, int ty) {
 struct IncrementalGroundSegmentation::State {
   GroundSegmentationConfig cfg;
   double cell = 0;
-  int k = 0;  // columns per tile edge
+  int k = 0;     // columns per tile edge
+  int base = 0;  // a tile corner's index below every index a map holds (+-2^20)
   struct Tile {
     int tx = 0, ty = 0;
     std::vector<std::uint32_t> ids;  // in id order
@@ -1027,8 +1028,8 @@ struct IncrementalGroundSegmentation::State {
     if (cell == voxel_size) return;
     cell = voxel_size;
     k = std::max(1, static_cast<int>(std::lround(cfg.tile_size / cell)));
+    base = floorDiv(-(1 << 20), k) * k;
   }
-  std::pair<int, int> tileOf(const VoxelIndex& i) const { return {floorDiv(i.x(), k), floorDiv(i.y(), k)}; }
 
   // appends to out, in key order, the tiles of the map within tile_radius of any of these that are
   // not yet in seen (and adds them to it)
@@ -1097,26 +1098,26 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   st.setCell(map.voxelSize());
   auto& voxels = map.voxels();
   const std::size_t n = voxels.size();
-  // take in the new voxels (successive ones mostly fall in one tile)
-  std::uint64_t last_key = 0;
-  State::Tile* last = nullptr;
-  for (std::size_t id = st.taken; id < n; ++id) {
-    const auto [tx, ty] = st.tileOf(voxels[id].index);
+  // take in the new voxels, run by run of successive voxels in one tile (most runs are long). A
+  // tile is due once its new voxels make up defer_share of its voxels: a share that only grows as
+  // voxels are added, so whether a run made it due is known at the run's end.
+  const OffsetDivider divide(st.base, st.k);
+  const auto tileOf = [&](std::size_t id) {
+    return std::pair<int, int>(st.base / st.k + divide(voxels[id].index.x()), st.base / st.k + divide(voxels[id].index.y()));
+  };
+  for (std::size_t id = st.taken; id < n;) {
+    const auto [tx, ty] = tileOf(id);
+    std::size_t end = id + 1;
+    while (end < n && tileOf(end) == std::pair<int, int>(tx, ty)) ++end;
     const std::uint64_t key = tileKey(tx, ty);
-    if (!last || key != last_key) {
-      last = &st.tiles[key];
-      last_key = key;
-      if (last->ids.empty()) last->tx = tx, last->ty = ty;
-    }
-    State::Tile& t = *last;
-    // a tile is due once its new voxels make up defer_share of its voxels (a share that only
-    // grows as voxels are added)
-    auto due = [&] {
+    State::Tile& t = st.tiles[key];
+    if (t.ids.empty()) t.tx = tx, t.ty = ty;
+    const auto due = [&] {
       return t.pending > 0 && static_cast<double>(t.pending) >= cfg.defer_share * static_cast<double>(t.ids.size());
     };
     const bool was_due = due();
-    t.ids.push_back(static_cast<std::uint32_t>(id));
-    ++t.pending;
+    t.pending += end - id;
+    for (; id < end; ++id) t.ids.push_back(static_cast<std::uint32_t>(id));
     if (!was_due && due()) st.touched.insert(key);
   }
   st.taken = n;
