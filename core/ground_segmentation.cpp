@@ -1102,8 +1102,9 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   // tile is due once its new voxels make up defer_share of its voxels: a share that only grows as
   // voxels are added, so whether a run made it due is known at the run's end.
   const OffsetDivider divide(st.base, st.k);
+  const int first_tile = st.base / st.k;
   const auto tileOf = [&](std::size_t id) {
-    return std::pair<int, int>(st.base / st.k + divide(voxels[id].index.x()), st.base / st.k + divide(voxels[id].index.y()));
+    return std::pair<int, int>(first_tile + divide(voxels[id].index.x()), first_tile + divide(voxels[id].index.y()));
   };
   for (std::size_t id = st.taken; id < n;) {
     const auto [tx, ty] = tileOf(id);

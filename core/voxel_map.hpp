@@ -48,6 +48,8 @@ class VoxelMap {
   // map is empty), kept as voxels are created.
   const VoxelIndex& lowestIndex() const { return lowest_; }
   const VoxelIndex& highestIndex() const { return highest_; }
+  // Labels, colours and heights may be changed through this; indices may not (the hash table and
+  // the index extent rest on them).
   std::vector<Voxel>& voxels() { return voxels_; }
   std::size_t size() const { return voxels_.size(); }
   // ids of voxels created since the last call
