@@ -327,18 +327,42 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       judge(CrownVerdict::Sunk);
       continue;
     }
-    // the top: the median sample, if the samples agree (a taller crown behind the column in some
-    // frames moves with parallax); the radius: the lower quartile (a run widened by a crown beside
-    // it errs only upwards)
+    // A sample bounds the crown's top from above: foliage above the crown in its column (a taller
+    // crown behind or before it in some frames) only lifts it. Of the groups of samples whose tops
+    // lie within max_top_spread (a share) above the group's lowest, the lowest group with
+    // min_samples samples whose cameras spread min_baseline gives the crown: its median top, and
+    // the lower quartile of its radii (a run widened by a crown beside it errs only upwards).
+    std::vector<const Sample*> by_top;
+    for (const Sample& s : samples) by_top.push_back(&s);
+    std::stable_sort(by_top.begin(), by_top.end(), [](const Sample* a, const Sample* b) { return a->top < b->top; });
+    // do the cameras of samples [first, end) of by_top lie min_baseline apart? (their bounding box
+    // decides most groups; the pairs only the rest)
+    const auto spread = [&](std::size_t first, std::size_t end) {
+      Eigen::AlignedBox2f box;
+      for (std::size_t i = first; i < end; ++i) box.extend(by_top[i]->camera);
+      const Eigen::Vector2f size = box.sizes();
+      if (size.maxCoeff() >= cfg.min_baseline) return true;
+      if (size.norm() < cfg.min_baseline) return false;
+      for (std::size_t i = first; i < end; ++i) {
+        for (std::size_t j = i + 1; j < end; ++j) {
+          if ((by_top[i]->camera - by_top[j]->camera).norm() >= cfg.min_baseline) return true;
+        }
+      }
+      return false;
+    };
     std::vector<float> tops, radii;
-    for (const Sample& s : samples) tops.push_back(s.top), radii.push_back(s.radius);
-    std::sort(tops.begin(), tops.end());
-    std::sort(radii.begin(), radii.end());
-    const double top = tops[tops.size() / 2], r = radii[radii.size() / 4];
-    if (tops[tops.size() * 3 / 4] - tops[tops.size() / 4] > cfg.max_top_spread * top) {
+    for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
+      std::size_t end = first;
+      while (end < by_top.size() && by_top[end]->top <= by_top[first]->top * (1 + cfg.max_top_spread)) ++end;
+      if (static_cast<int>(end - first) < std::max(1, cfg.min_samples) || !spread(first, end)) continue;
+      for (std::size_t i = first; i < end; ++i) tops.push_back(by_top[i]->top), radii.push_back(by_top[i]->radius);
+    }
+    if (tops.empty()) {
       judge(CrownVerdict::Disagree);
       continue;
     }
+    std::sort(radii.begin(), radii.end());
+    const double top = tops[tops.size() / 2], r = radii[radii.size() / 4];
     if (r < cfg.min_radius) {
       judge(CrownVerdict::TooNarrow);
       continue;

@@ -166,6 +166,57 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   EXPECT_NEAR(tree.at(0, 100).height(), 11.0, 0.15);
 }
 
+// Foliage above the crown in its column (a taller crown behind it in some frames) lifts a sample's
+// top, never lowers it: the lowest group of samples that agree, with enough of them seen from far
+// enough apart, gives the crown. Shifting the crown up by 25 px in the image stands for such frames.
+TEST(CrownCompletionTest, TheLowestGroupOfAgreeingSamplesGivesTheTop) {
+  // samples from the camera moved east by each x [m], with the crown drawn up by the shift [px]
+  const auto sampled = [](Tree& tree, CrownSampler& sampler, const std::vector<std::pair<double, int>>& views) {
+    const Pose start = tree.pose;
+    for (const auto& [x, shift] : views) {
+      tree.pose.translation().x() = start.translation().x() + x;
+      EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(shift), tree.k, tree.pose, CrownConfig{},
+                                BoundaryEstimationConfig{}),
+                1)
+          << x << " m, " << shift << " px";
+    }
+    tree.pose = start;
+  };
+  // 25 px at 20 m lifts the top by about 1.6 m
+  const double lifted = 11.0 + 25 * 20.0 / CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180).fy;
+  CrownConfig cfg;
+  cfg.min_baseline = 2.0;
+  {
+    // three true tops from 2.5 m apart below four lifted ones: the true ones stand (the median of
+    // all seven, 12.6 m, with an interquartile range of 1.6 m, would be refused as disagreeing)
+    Tree tree;
+    CrownSampler sampler;
+    sampled(tree, sampler, {{0.0, 0}, {1.2, 0}, {2.5, 0}, {0.4, 25}, {0.8, 25}, {1.6, 25}, {2.0, 25}});
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    tree.expectCap();
+  }
+  {
+    // the true tops all from within 0.4 m: too close to tell a crown behind; the lifted ones, from
+    // 2.5 m apart, agree among themselves and set the top
+    Tree tree;
+    CrownSampler sampler;
+    sampled(tree, sampler, {{0.0, 0}, {0.2, 0}, {0.4, 0}, {0.0, 25}, {0.8, 25}, {1.6, 25}, {2.5, 25}});
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    EXPECT_NEAR(tree.at(1, 100).height(), lifted, 0.2);
+  }
+  {
+    // tops 1.6 m apart step by step: no two within a tenth of each other, no group of three
+    Tree tree;
+    CrownSampler sampler;
+    sampled(tree, sampler, {{0.0, 0}, {1.2, 25}, {2.5, 50}});
+    EXPECT_EQ(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Disagree);
+    EXPECT_FALSE(tree.at(1, 100).raised());
+  }
+}
+
 TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOff) {
   Tree tree;
   CrownSampler sampler;
