@@ -77,8 +77,11 @@ struct CrownConfig {
   // their real height from 123 to 127 of 332 (flat 1, forest 1 twice, urban 4; their samples' cameras
   // 2-4 m apart), none more too high (23) and the terrain cells raised by mistake unchanged (931); at
   // 1 m 132 trees but urban 3's terrain raised 22 -> 322 cells, at 0 136 trees, 25 too high and 1554
-  // terrain cells raised.
-  double min_baseline = 2.0;
+  // terrain cells raised. With the crown taken from the lowest group of agreeing samples (above):
+  // 2 m 129 trees (23 too high, terrain 931), 1.5 m 131 (23, 932: forest 2 tree_148, urban 2
+  // tree_050), 1.25 m 133 (23, but urban 3's terrain 22 -> 322: a false crown whose samples'
+  // cameras lie 1.25-1.5 m apart), 1 m 134 (24, 1374). 1.5 keeps a quarter of a metre from that.
+  double min_baseline = 1.5;
   int min_height_px = 3;         // [px] crown rows needed in the trunk's column
   double max_offcentre = 0.2;    // the widest run's centre may lie this share of its width (+1 px)
                                  // beside the trunk's column; farther, the run is another crown
