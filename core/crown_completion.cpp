@@ -20,9 +20,8 @@ struct Trunk {
   CellIndex lo, hi;        // its cells' bounds
 };
 
-// Does the trunk stand at least min_height above the lowest ground vertex within 1 m of it? (Yes
-// when there is no ground there to compare with.)
-bool standsAboveGround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map, double min_height) {
+// The height [m] of the lowest ground vertex within 1 m of the trunk; +inf if there is none.
+double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map) {
   const auto& vertices = mesh.vertices();
   const int ring = static_cast<int>(std::ceil(1.0 / map.voxelSize()));
   double ground = std::numeric_limits<double>::infinity();
@@ -33,6 +32,13 @@ bool standsAboveGround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& 
         ground = std::min(ground, static_cast<double>(vertices[j].sensed_height));
     }
   }
+  return ground;
+}
+
+// Does the trunk stand at least min_height above the lowest ground vertex within 1 m of it? (Yes
+// when there is no ground there to compare with.)
+bool standsAboveGround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map, double min_height) {
+  const double ground = groundAround(t, mesh, map);
   return !std::isfinite(ground) || t.top - ground >= min_height;
 }
 
@@ -329,7 +335,9 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     }
     // A sample bounds the crown's top from above: foliage above the crown in its column (a taller
     // crown behind or before it in some frames) only lifts it. Of the groups of samples whose tops
-    // lie within max_top_spread (a share) above the group's lowest, the lowest group with
+    // lie within max_top_spread (a share of the lowest one's height above the ground around the
+    // trunk, or above the trunk's sensed top where no ground is near) above the group's lowest,
+    // the lowest group with
     // min_samples samples whose cameras spread min_baseline gives the crown: its median top, and
     // the lower quartile of its radii (a run widened by a crown beside it errs only upwards).
     std::vector<const Sample*> by_top;
@@ -350,10 +358,12 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       }
       return false;
     };
+    const double ground = groundAround(t, mesh, map), foot = std::isfinite(ground) ? ground : t.top;
     std::vector<float> tops, radii;
     for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
+      const double lowest = by_top[first]->top, reach = lowest + cfg.max_top_spread * std::max(0.0, lowest - foot);
       std::size_t end = first;
-      while (end < by_top.size() && by_top[end]->top <= by_top[first]->top * (1 + cfg.max_top_spread)) ++end;
+      while (end < by_top.size() && by_top[end]->top <= reach) ++end;
       if (static_cast<int>(end - first) < std::max(1, cfg.min_samples) || !spread(first, end)) continue;
       for (std::size_t i = first; i < end; ++i) tops.push_back(by_top[i]->top), radii.push_back(by_top[i]->radius);
     }

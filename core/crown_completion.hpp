@@ -66,8 +66,9 @@ struct CrownConfig {
   int min_samples = 3;           // frames that must have measured a crown
   // A sample's crown top bounds the crown from above (foliage behind or before the crown in its
   // column only lifts it): the crown's top is the median of the lowest group of samples whose tops
-  // lie within this share above the group's lowest, with min_samples samples whose cameras spread
-  // min_baseline. Before, the median of all samples with their interquartile range within this
+  // lie within this share above the group's lowest (a share of its height above the ground around
+  // the trunk, or above the trunk's sensed top where no ground is near: world heights may be
+  // negative), with min_samples samples whose cameras spread min_baseline. Before, the median of all samples with their interquartile range within this
   // share of it: on 60 frames of the 12 scenes (above) trees at their real height 128 -> 129 of 332
   // (urban 4 tree_042: five samples at 12.4-12.7 m from the first 2.5 m of the drive, then eight at
   // 15.3-16.2 m rising as the camera neared, a crown behind), nothing else changed.

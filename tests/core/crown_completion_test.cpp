@@ -35,16 +35,21 @@ struct Tree {
   // lidar saw 1 m east of this one and 2 m behind it, rising into the crown in the image, its own
   // crown not shown; smear: the trunk's cells run this many cells north from (0, 100), as the pose
   // noise of a long drive spreads a thin trunk's returns (the same vertex ids as without)
+  // z0_voxels: everything (ground, trunk, crown, camera) that many voxels higher (z0 [m]); world
+  // heights may be negative
   enum class Behind { Nothing, Wall, Trunk };
-  explicit Tree(Behind behind = Behind::Nothing, bool second_trunk = false, int smear = 1) : second(second_trunk) {
+  double z0 = 0;
+  explicit Tree(Behind behind = Behind::Nothing, bool second_trunk = false, int smear = 1, int z0_voxels = 0)
+      : second(second_trunk), z0(z0_voxels * 0.2) {
+    pose.translation().z() += z0;
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
     if (behind != Behind::Nothing) {
       const int half = behind == Behind::Wall ? 20 : 0;
       for (int x = -half; x <= half; ++x) {
         Voxel v;
-        v.height = 3.0f;
-        v.index = VoxelIndex(x, 150, 15);
+        v.height = static_cast<float>(3.0 + z0);
+        v.index = VoxelIndex(x, 150, 15 + z0_voxels);
         v.label = VoxelLabel::NonGround;
         MeshVertex m;
         m.cell = CellIndex(x, 150);
@@ -58,7 +63,8 @@ struct Tree {
       for (int y = 75; y <= 125; ++y) {
         const bool trunk = (x == 0 && y >= 100 && y < 100 + smear) || (second_trunk && x == 5 && y == 110);
         if (!trunk && std::hypot(x * 0.2, (y - 100) * 0.2) > 5.0) continue;
-        test::addColumn(voxels, vertices, CellIndex(x, y), trunk ? 15 : 0, trunk ? 3.0f : 0.0f,
+        test::addColumn(voxels, vertices, CellIndex(x, y), (trunk ? 15 : 0) + z0_voxels,
+                        static_cast<float>((trunk ? 3.0 : 0.0) + z0),
                         trunk ? VoxelLabel::NonGround : VoxelLabel::Ground);
       }
     }
@@ -69,9 +75,9 @@ struct Tree {
   // the ground raised to the crown's cap: its top is 11 m and its radius 3 m, to within a pixel at
   // 20 m (about 0.05 m) and the rasterised silhouette
   void expectCap() const {
-    EXPECT_NEAR(at(1, 100).height(), 11.0, 0.15);
+    EXPECT_NEAR(at(1, 100).height(), 11.0 + z0, 0.15);
     // 2 m from the trunk: 11 - 3 + sqrt(9 - 4)
-    EXPECT_NEAR(at(10, 100).height(), 8.0 + std::sqrt(5.0), 0.2);
+    EXPECT_NEAR(at(10, 100).height(), 8.0 + std::sqrt(5.0) + z0, 0.2);
     // beyond 3.2 m the ground stays ground
     EXPECT_FALSE(at(17, 100).raised());
     EXPECT_FALSE(at(0, 117).raised());
@@ -84,14 +90,14 @@ struct Tree {
     const Pose camera_from_world = pose.inverse();
     const int horizon = static_cast<int>(k.cy);
     cv::rectangle(rgb, cv::Rect(0, horizon, k.width, k.height - horizon), cv::Scalar(90, 110, 60), cv::FILLED);
-    const auto base = project(k, camera_from_world * Point3(0.1, 20.1, 0.0));
-    const auto centre = project(k, camera_from_world * Point3(0.1, 20.1, 8.0));
+    const auto base = project(k, camera_from_world * Point3(0.1, 20.1, z0));
+    const auto centre = project(k, camera_from_world * Point3(0.1, 20.1, 8.0 + z0));
     const double radius_px = k.fx * std::asin(3.0 / 20.0);
     cv::rectangle(rgb, cv::Point(static_cast<int>(base->x()) - 2, static_cast<int>(centre->y()) - crown_shift),
                   cv::Point(static_cast<int>(base->x()) + 2, static_cast<int>(base->y())), cv::Scalar(90, 60, 30),
                   cv::FILLED);
     if (second) {
-      const auto behind = project(k, camera_from_world * Point3(1.1, 22.1, 0.0));
+      const auto behind = project(k, camera_from_world * Point3(1.1, 22.1, z0));
       cv::rectangle(rgb, cv::Point(static_cast<int>(behind->x()) - 2, static_cast<int>(centre->y())),
                     cv::Point(static_cast<int>(behind->x()) + 2, static_cast<int>(behind->y())), cv::Scalar(90, 60, 30),
                     cv::FILLED);
@@ -214,6 +220,16 @@ TEST(CrownCompletionTest, TheLowestGroupOfAgreeingSamplesGivesTheTop) {
     EXPECT_EQ(sampler.apply(tree.mesh, tree.map, cfg), 0);
     EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Disagree);
     EXPECT_FALSE(tree.at(1, 100).raised());
+  }
+  {
+    // the first case 40 m below the world origin: the share is of the height above the ground
+    // around the trunk, so the tops still agree as they do at the origin
+    Tree tree(Tree::Behind::Nothing, false, 1, -200);
+    CrownSampler sampler;
+    sampled(tree, sampler, {{0.0, 0}, {1.2, 0}, {2.5, 0}, {0.4, 25}, {0.8, 25}, {1.6, 25}, {2.0, 25}});
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    tree.expectCap();
   }
 }
 
