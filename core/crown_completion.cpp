@@ -329,7 +329,9 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       judge(CrownVerdict::NoBaseline);
       continue;
     }
-    if (!standsAboveGround(t, mesh, map, cfg.min_trunk_height)) {
+    // (standsAboveGround, with the ground kept for the tops below)
+    const double ground = groundAround(t, mesh, map);
+    if (std::isfinite(ground) && t.top - ground < cfg.min_trunk_height) {
       judge(CrownVerdict::Sunk);
       continue;
     }
@@ -337,9 +339,9 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     // crown behind or before it in some frames) only lifts it. Of the groups of samples whose tops
     // lie within max_top_spread (a share of the lowest one's height above the ground around the
     // trunk, or above the trunk's sensed top where no ground is near) above the group's lowest,
-    // the lowest group with
-    // min_samples samples whose cameras spread min_baseline gives the crown: its median top, and
-    // the lower quartile of its radii (a run widened by a crown beside it errs only upwards).
+    // the lowest group with min_samples samples whose cameras spread min_baseline gives the crown:
+    // its median top, and the lower quartile of its radii (a run widened by a crown beside it errs
+    // only upwards).
     std::vector<const Sample*> by_top;
     for (const Sample& s : samples) by_top.push_back(&s);
     std::stable_sort(by_top.begin(), by_top.end(), [](const Sample* a, const Sample* b) { return a->top < b->top; });
@@ -358,7 +360,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       }
       return false;
     };
-    const double ground = groundAround(t, mesh, map), foot = std::isfinite(ground) ? ground : t.top;
+    const double foot = std::isfinite(ground) ? ground : t.top;
     std::vector<float> tops, radii;
     for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
       const double lowest = by_top[first]->top, reach = lowest + cfg.max_top_spread * std::max(0.0, lowest - foot);
