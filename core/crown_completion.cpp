@@ -35,10 +35,9 @@ double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map
   return ground;
 }
 
-// Does the trunk stand at least min_height above the lowest ground vertex within 1 m of it? (Yes
-// when there is no ground there to compare with.)
-bool standsAboveGround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map, double min_height) {
-  const double ground = groundAround(t, mesh, map);
+// Does the trunk stand at least min_height above the ground around it (groundAround)? (Yes when
+// there is no ground there to compare with.)
+bool standsAboveGround(const Trunk& t, double ground, double min_height) {
   return !std::isfinite(ground) || t.top - ground >= min_height;
 }
 
@@ -263,7 +262,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       continue;
     }
     // one that does not stand above its ground is measured for no crown (but may own one above)
-    if (!standsAboveGround(t, mesh, map, cfg.min_trunk_height)) {
+    if (!standsAboveGround(t, groundAround(t, mesh, map), cfg.min_trunk_height)) {
       count(CrownOutcome::NotAboveGround);
       continue;
     }
@@ -329,9 +328,8 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       judge(CrownVerdict::NoBaseline);
       continue;
     }
-    // (standsAboveGround, with the ground kept for the tops below)
-    const double ground = groundAround(t, mesh, map);
-    if (std::isfinite(ground) && t.top - ground < cfg.min_trunk_height) {
+    const double ground = groundAround(t, mesh, map);  // also for the tops' agreement below
+    if (!standsAboveGround(t, ground, cfg.min_trunk_height)) {
       judge(CrownVerdict::Sunk);
       continue;
     }
