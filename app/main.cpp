@@ -260,7 +260,15 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
     }
     queue.close();
   });
+  // boundary images go into out/boundaries. If the input fails before the last frame, the run
+  // removes that folder again (when it made it): out is left as it was found, and the same --out
+  // can be given once the input is mended.
   const fs::path boundary_dir = out / "boundaries";
+  const bool had_boundary_dir = fs::exists(boundary_dir);
+  const auto dropBoundaryImages = [&] {
+    std::error_code ec;
+    if (!had_boundary_dir) fs::remove_all(boundary_dir, ec);
+  };
   fs::create_directories(boundary_dir);
   app::Progress progress(quiet ? "" : "reconstruct", source.frameCount());
   int done = 0, last_written = -1;
@@ -281,10 +289,14 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   } catch (...) {
     queue.close();
     sensing.join();
+    dropBoundaryImages();
     throw;
   }
   sensing.join();
-  if (sensing_error) std::rethrow_exception(sensing_error);
+  if (sensing_error) {
+    dropBoundaryImages();
+    std::rethrow_exception(sensing_error);
+  }
   pipeline.finish();
   app::writeReconstruction(out, pipeline);
   // summary
