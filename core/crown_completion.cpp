@@ -280,10 +280,40 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   auto& vertices = mesh.vertices();
   const double cell = map.voxelSize();
   int raised = 0;
-  // only trunks with samples count: the wider limit lets in those that have grown since
-  const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, std::max(cfg.max_trunk_width, cfg.max_grown_width));
+  // only trunks with samples count: the wider limit lets in those that have grown since. An object
+  // wider still, up to a crown's width, may be a trunk that the lidar saw grow into its crown's
+  // underside as the robot neared: it is judged once its samples give the crown's radius.
+  const double grown_width = std::max(cfg.max_trunk_width, cfg.max_grown_width);
+  std::vector<Trunk> trunks;
+  std::unordered_map<std::int32_t, Trunk> wide;  // by object
+  for (const Trunk& t : findTrunks(mesh, map, objects, 2 * cfg.max_radius)) {
+    if (((t.hi - t.lo).array() + 1).maxCoeff() * cell <= grown_width) {
+      trunks.push_back(t);
+    } else {
+      wide.emplace(t.object, t);
+    }
+  }
+  const std::size_t narrow = trunks.size();
+  std::unordered_map<std::int32_t, std::size_t> grown_of_object;  // the wide objects taken as trunks
+  // the object with a vertex nearest p within 1 m; -1 if none
+  const auto objectNear = [&](const Eigen::Vector2d& p) {
+    const int ring = static_cast<int>(std::ceil(1.0 / cell));
+    const CellIndex c0(static_cast<int>(std::floor(p.x() / cell)), static_cast<int>(std::floor(p.y() / cell)));
+    std::int32_t best = -1;
+    double best_d2 = 1.0;
+    for (int dy = -ring; dy <= ring; ++dy) {
+      for (int dx = -ring; dx <= ring; ++dx) {
+        const std::int64_t j = mesh.find(c0 + CellIndex(dx, dy));
+        if (j < 0 || objects.of[j] < 0) continue;
+        const Eigen::Vector2d q((vertices[j].cell.x() + 0.5) * cell, (vertices[j].cell.y() + 0.5) * cell);
+        if ((q - p).squaredNorm() <= best_d2) best_d2 = (q - p).squaredNorm(), best = objects.of[j];
+      }
+    }
+    return best;
+  };
   // each key's samples go to the trunk of that key, else to the trunk nearest their last sample's
-  // trunk position within 1 m; keys in order, so that the merged samples' order is fixed
+  // trunk position within 1 m, else to the grown trunk under it (standing where the samples saw the
+  // trunk); keys in order, so that the merged samples' order is fixed
   std::unordered_map<std::uint32_t, std::size_t> trunk_of_key;
   for (std::size_t i = 0; i < trunks.size(); ++i) trunk_of_key[trunks[i].key] = i;
   std::vector<std::uint32_t> keys;
@@ -293,14 +323,27 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   std::vector<std::vector<std::uint32_t>> merged_keys(trunks.size());
   for (std::uint32_t key : keys) {
     const std::vector<Sample>& list = samples_.at(key);
+    const Eigen::Vector2d seen_at = list.back().trunk.cast<double>();
     std::size_t to = trunks.size();
     if (const auto own = trunk_of_key.find(key); own != trunk_of_key.end()) {
       to = own->second;
     } else {
       double best = 1.0;
-      for (std::size_t i = 0; i < trunks.size(); ++i) {
-        const double d = (trunks[i].centre - list.back().trunk.cast<double>()).norm();
+      for (std::size_t i = 0; i < narrow; ++i) {
+        const double d = (trunks[i].centre - seen_at).norm();
         if (d <= best) best = d, to = i;
+      }
+    }
+    if (to == trunks.size()) {
+      const std::int32_t o = objectNear(seen_at);
+      if (const auto grown = grown_of_object.find(o); grown != grown_of_object.end()) {
+        to = grown->second;
+      } else if (const auto w = wide.find(o); w != wide.end()) {
+        to = trunks.size();
+        trunks.push_back(w->second);
+        trunks.back().centre = seen_at;
+        grown_of_object[o] = to;
+        merged.emplace_back(), merged_keys.emplace_back();
       }
     }
     if (to == trunks.size()) continue;
@@ -376,6 +419,16 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     if (r < cfg.min_radius) {
       judge(CrownVerdict::TooNarrow);
       continue;
+    }
+    // a grown trunk is the tree only while all of it lies within the crown's radius of where the
+    // trunk stood (half a metre more): a facade that a fragment of it grew into reaches past
+    if (ti >= narrow) {
+      const double half = r + 0.5;
+      if ((t.lo.cast<double>() * cell - t.centre).minCoeff() < -half ||
+          ((t.hi.cast<double>().array() + 1) * cell - t.centre.array()).maxCoeff() > half) {
+        judge(CrownVerdict::NotApplied);
+        continue;
+      }
     }
     judge(CrownVerdict::Raised);
     // the ground vertices (and the trunk's own) within the radius: a spherical cap topped at `top`

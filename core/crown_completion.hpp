@@ -106,7 +106,8 @@ enum class CrownOutcome : std::uint8_t {
 constexpr std::size_t kCrownOutcomes = 9;
 // What the end of the run made of a trunk's samples.
 enum class CrownVerdict : std::uint8_t {
-  NotApplied,     // not judged (the run did not end, or the trunk is no longer one)
+  NotApplied,     // not judged (the run did not end, or the trunk is no longer one nor an object
+                  // within the crown's radius of it)
   TooFewSamples,  // fewer than min_samples
   NoBaseline,     // the samples' cameras within min_baseline of each other
   Sunk,           // the trunk no longer stands min_trunk_height above its ground
@@ -149,7 +150,10 @@ class CrownSampler {
   // (MeshVertex::spread, as spreadEstimates does). Returns the number of vertices raised. A trunk
   // whose object changed as the map grew (another lowest vertex) left samples under its old key:
   // samples go to the trunk of their key, else to the trunk nearest where they were taken, within
-  // 1 m.
+  // 1 m, else to the object with a vertex nearest there, within 1 m: a trunk grown past
+  // max_grown_width (the lidar reached the crown's underside), which takes them only if all of it
+  // lies within the crown's radius (+0.5 m) of where the trunk was seen, and then raises its own
+  // vertices under the cap as well.
   // Sets each trunk record's verdict.
   int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config);
 

@@ -36,10 +36,14 @@ struct Tree {
   // crown not shown; smear: the trunk's cells run this many cells north from (0, 100), as the pose
   // noise of a long drive spreads a thin trunk's returns (the same vertex ids as without)
   // z0_voxels: everything (ground, trunk, crown, camera) that many voxels higher (z0 [m]); world
-  // heights may be negative
+  // heights may be negative. grown: what the trunk's object took in after it was measured, as the
+  // robot neared: the crown's underside within 2 m of it, sensed at 5 m (Grown::IntoCrown), or a
+  // facade running 5 m east from it, sensed at 3 m (Grown::IntoFacade)
   enum class Behind { Nothing, Wall, Trunk };
+  enum class Grown { No, IntoCrown, IntoFacade };
   double z0 = 0;
-  explicit Tree(Behind behind = Behind::Nothing, bool second_trunk = false, int smear = 1, int z0_voxels = 0)
+  explicit Tree(Behind behind = Behind::Nothing, bool second_trunk = false, int smear = 1, int z0_voxels = 0,
+                Grown grown = Grown::No)
       : second(second_trunk), z0(z0_voxels * 0.2) {
     pose.translation().z() += z0;
     std::vector<Voxel> voxels;
@@ -61,11 +65,13 @@ struct Tree {
     }
     for (int x = -25; x <= 25; ++x) {
       for (int y = 75; y <= 125; ++y) {
-        const bool trunk = (x == 0 && y >= 100 && y < 100 + smear) || (second_trunk && x == 5 && y == 110);
+        const bool trunk = (x == 0 && y >= 100 && y < 100 + smear) || (second_trunk && x == 5 && y == 110) ||
+                           (grown == Grown::IntoFacade && x > 0 && y == 100);
+        const bool underside = grown == Grown::IntoCrown && !trunk && std::hypot(x * 0.2, (y - 100) * 0.2) <= 2.0;
         if (!trunk && std::hypot(x * 0.2, (y - 100) * 0.2) > 5.0) continue;
-        test::addColumn(voxels, vertices, CellIndex(x, y), (trunk ? 15 : 0) + z0_voxels,
-                        static_cast<float>((trunk ? 3.0 : 0.0) + z0),
-                        trunk ? VoxelLabel::NonGround : VoxelLabel::Ground);
+        const int z = underside ? 25 : (trunk ? 15 : 0);
+        test::addColumn(voxels, vertices, CellIndex(x, y), z + z0_voxels, static_cast<float>(z * 0.2 + z0),
+                        trunk || underside ? VoxelLabel::NonGround : VoxelLabel::Ground);
       }
     }
     EXPECT_TRUE(map.restore(voxels));
@@ -266,28 +272,61 @@ TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOf
   EXPECT_EQ(once.apply(tree.mesh, tree.map, cfg), 0);
 }
 
-TEST(CrownCompletionTest, ATrunkWhoseReturnsSpreadAsTheDriveGoesOnKeepsItsCrown) {
-  // measured while one cell wide
-  Tree thin;
-  CrownConfig cfg;
-  cfg.min_baseline = 0;
+// A sampler that measured the tree's crown in three frames of its image.
+CrownSampler sampledThrice(const Tree& tree, const CrownConfig& cfg) {
   CrownSampler sampler;
   for (int frame = 0; frame < 3; ++frame) {
-    EXPECT_EQ(sampler.measure(thin.mesh, thin.map, thin.image(), thin.k, thin.pose, cfg, BoundaryEstimationConfig{}),
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}),
               1);
   }
-  // by the end its returns run 1.6 m north: wider than a trunk while measuring, not after
+  return sampler;
+}
+
+TEST(CrownCompletionTest, ATrunkWhoseReturnsSpreadAsTheDriveGoesOnKeepsItsCrown) {
+  // measured while one cell wide
+  CrownConfig cfg;
+  cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+  CrownSampler sampler = sampledThrice(Tree(), cfg);
+  // by the end its returns run 1.6 m north: wider than a trunk while measuring, not after. The
+  // cap's centre moves north with the trunk's, to y = 20.8 m: (0.1, 17.5), 2.6 m south of where the
+  // crown was seen, lies 3.3 m from it, outside the 3 m crown
   Tree grown(Tree::Behind::Nothing, false, 8);
-  CrownConfig strict = cfg;
-  strict.max_grown_width = strict.max_trunk_width;
-  EXPECT_EQ(sampler.apply(grown.mesh, grown.map, strict), 0);
   EXPECT_GT(sampler.apply(grown.mesh, grown.map, cfg), 0);
-  // the cap's centre moved 0.7 m north with the trunk's
   EXPECT_NEAR(grown.at(1, 100).height(), 11.0, 0.15);
   EXPECT_FALSE(grown.at(17, 100).raised());
+  EXPECT_FALSE(grown.at(0, 87).raised());
+  // past max_grown_width it is still the tree, all of it within the crown's radius of where the
+  // crown was seen: the cap stands there
+  Tree past(Tree::Behind::Nothing, false, 8);
+  CrownConfig strict = cfg;
+  strict.max_grown_width = strict.max_trunk_width;
+  EXPECT_GT(sampler.apply(past.mesh, past.map, strict), 0);
+  EXPECT_NEAR(past.at(0, 100).height(), 11.0, 0.15);
+  EXPECT_TRUE(past.at(0, 87).raised());
+  EXPECT_FALSE(past.at(17, 100).raised());
   // grown: not measured as a trunk
   EXPECT_EQ(sampler.measure(grown.mesh, grown.map, grown.image(), grown.k, grown.pose, cfg, BoundaryEstimationConfig{}),
             0);
+}
+
+// As the robot nears, the lidar reaches the crown's underside and the trunk's object grows to the
+// crown's width: its samples still raise the ground and the underside to the crown's cap. A trunk
+// that grew into a facade reaching past the crown's radius raises nothing.
+TEST(CrownCompletionTest, ATrunkGrownIntoItsCrownKeepsItsSamplesOneGrownIntoAFacadeDoesNot) {
+  CrownConfig cfg;
+  cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+  CrownSampler sampler = sampledThrice(Tree(), cfg);
+  Tree facade(Tree::Behind::Nothing, false, 1, 0, Tree::Grown::IntoFacade);
+  EXPECT_EQ(sampler.apply(facade.mesh, facade.map, cfg), 0);
+  for (const CrownRecord& r : sampler.records()) EXPECT_EQ(r.verdict, CrownVerdict::NotApplied);
+  EXPECT_FALSE(facade.at(0, 101).raised());
+  Tree crown(Tree::Behind::Nothing, false, 1, 0, Tree::Grown::IntoCrown);
+  ASSERT_FALSE(crown.at(10, 100).raised());
+  EXPECT_GT(sampler.apply(crown.mesh, crown.map, cfg), 0);
+  for (const CrownRecord& r : sampler.records()) EXPECT_EQ(r.verdict, CrownVerdict::Raised);
+  crown.expectCap();
+  // the underside, sensed at 5 m, is raised with the ground beyond it
+  EXPECT_NEAR(crown.at(5, 100).height(), 8.0 + std::sqrt(9.0 - 1.0), 0.2);
 }
 
 // A patch of terrain labelled non-ground, level with the ground around it, is no trunk, whatever
