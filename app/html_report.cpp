@@ -171,7 +171,9 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       const auto& t = tops[kind];
       h << kind << "s at their real height (within 10 % of their height, at least 1 m): "
         << t["at_height_before"].get<std::size_t>() << " sensed only, " << t["at_height_after"].get<std::size_t>()
-        << " after recovery, of " << t["top_seen"].get<std::size_t>() << ". ";
+        << " after recovery, of " << t["top_seen"].get<std::size_t>() << "; above it by more than that: "
+        << t["too_high_before"].get<std::size_t>() << " sensed only, " << t["too_high_after"].get<std::size_t>()
+        << " after recovery. ";
     }
     h << "</p><table><tr><th>object</th><th>class</th><th>true top m</th><th>sensed top m</th><th>recovered top m</th>"
          "<th>error m</th><th>frames</th><th>cells</th><th>estimation (vertex-frames)</th><th>crown (frames: verdict)</th></tr>";

@@ -203,8 +203,9 @@ void printScorecard(const nlohmann::json& r) {
     for (const char* k : {"building", "tree"}) {
       const auto& t = h["object_tops"][k];
       std::cout << " " << k << "s " << t["at_height_before"].get<std::size_t>() << " -> " << t["at_height_after"].get<std::size_t>()
-                << " of " << t["top_seen"].get<std::size_t>() << " (top MAE " << t["before"]["mae_m"].get<double>() << " -> "
-                << t["after"]["mae_m"].get<double>() << " m);";
+                << " of " << t["top_seen"].get<std::size_t>() << " (too high " << t["too_high_before"].get<std::size_t>()
+                << " -> " << t["too_high_after"].get<std::size_t>() << "; top MAE " << t["before"]["mae_m"].get<double>()
+                << " -> " << t["after"]["mae_m"].get<double>() << " m);";
     }
     std::cout << "\n";
   }

@@ -222,8 +222,10 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
     const std::map<std::string, int> seen = topSeenFrames(world, pipeline.calibration().camera, truth.cameras);
     json& tops = hr["object_tops"];
     json& list = tops["list"] = json::object();
+    // per class: objects seen, at their real height and above it by more than the tolerance, sensed
+    // only (before) and recovered (after)
     struct Sum {
-      std::size_t seen = 0, before = 0, after = 0;
+      std::size_t seen = 0, before = 0, after = 0, high_before = 0, high_after = 0;
       std::vector<double> e_before, e_after;
     };
     std::map<std::string, Sum> sums = {{"building", {}}, {"tree", {}}};
@@ -259,6 +261,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       Sum& s = sums[t.building ? "building" : "tree"];
       ++s.seen;
       s.before += std::abs(eb) <= tol, s.after += std::abs(ea) <= tol;
+      s.high_before += eb > tol, s.high_after += ea > tol;
       s.e_before.push_back(eb), s.e_after.push_back(ea);
       json outcomes = json::object();
       for (std::size_t k = 0; k < kEstimateOutcomes; ++k) outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = t.outcomes[k];
@@ -277,6 +280,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
     }
     for (const auto& [kind, s] : sums) {
       tops[kind] = {{"top_seen", s.seen}, {"at_height_before", s.before}, {"at_height_after", s.after},
+                    {"too_high_before", s.high_before}, {"too_high_after", s.high_after},
                     {"before", errorJson(errorStats(s.e_before))}, {"after", errorJson(errorStats(s.e_after))}};
     }
     tops["frames"] = truth.cameras.size();
