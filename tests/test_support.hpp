@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <random>
@@ -48,6 +49,12 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// For tests that drive the command line: the terrain executable, the committed urban scene, and a
+// shell command's exit status as std::system returns it.
+inline const std::string kCli = TERRAIN_CLI;
+inline const std::string kUrbanScene = std::string(TERRAIN_SOURCE_DIR) + "/scenes/library/urban_1.xml";
+inline int sh(const std::string& command) { return std::system(command.c_str()); }
 
 // A flat plane named "ground", a wall (class building) whose near face is at x = wall_x, and
 // the robot body with its camera, as generated scenes have them.

@@ -14,10 +14,8 @@ namespace terrain {
 namespace {
 
 namespace fs = std::filesystem;
-
-const std::string kCli = TERRAIN_CLI;
-
-int sh(const std::string& command) { return std::system(command.c_str()); }
+using test::kCli;
+using test::sh;
 
 class EvaluateTest : public ::testing::Test {
  protected:

@@ -18,10 +18,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kCli = TERRAIN_CLI;
-const std::string kScene = std::string(TERRAIN_SOURCE_DIR) + "/scenes/library/urban_1.xml";
-
-int sh(const std::string& command) { return std::system(command.c_str()); }
+using test::kCli;
+using test::sh;
+const std::string& kScene = test::kUrbanScene;
 
 nlohmann::json report(const fs::path& dir) { return nlohmann::json::parse(io::readFile(dir / "report.json")); }
 

@@ -16,9 +16,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kCli = TERRAIN_CLI;
-
-int sh(const std::string& command) { return std::system(command.c_str()); }
+using test::kCli;
+using test::sh;
 
 TEST(RunTest, OneCoreAndEveryCoreGiveTheSameOutputs) {
   if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "needs a machine of two cores or more";
