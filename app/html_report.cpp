@@ -2,6 +2,7 @@
 
 #include "app/outputs.hpp"
 #include "core/camera_model.hpp"
+#include "evaluation/report.hpp"
 
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
@@ -175,15 +176,24 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
         << t["too_high_before"].get<std::size_t>() << " sensed only, " << t["too_high_after"].get<std::size_t>()
         << " after recovery. ";
     }
+    h << "Of those, seen in a frame that also saw their lower part (within " << eval::kLowerPart
+      << " m of the base, where the lidar reaches; the method raises an object only from such a frame):";
+    for (const char* kind : {"building", "tree"}) {
+      const auto& w = tops[kind]["lower_part_seen_with_top"];
+      h << " " << kind << "s " << w["at_height_before"].get<std::size_t>() << " sensed only, "
+        << w["at_height_after"].get<std::size_t>() << " after recovery, of " << w["objects"].get<std::size_t>() << ";";
+    }
     h << "</p><table><tr><th>object</th><th>class</th><th>true top m</th><th>sensed top m</th><th>recovered top m</th>"
-         "<th>error m</th><th>frames</th><th>cells</th><th>estimation (vertex-frames)</th><th>crown (frames: verdict)</th></tr>";
+         "<th>error m</th><th>frames (with lower part)</th><th>cells</th><th>estimation (vertex-frames)</th>"
+         "<th>crown (frames: verdict)</th></tr>";
     for (auto it = tops["list"].begin(); it != tops["list"].end(); ++it) {
       const auto& o = it.value();
       const bool ok = std::abs(o["error_m"].get<double>()) <= o["tolerance_m"].get<double>();
       h << "<tr><td style=\"text-align:left\">" << it.key() << "</td><td>" << o["class"].get<std::string>() << "</td><td>"
         << fmt(o["true_top_m"]) << "</td><td>" << fmt(o["sensed_top_m"]) << "</td><td>" << fmt(o["recovered_top_m"])
         << "</td><td" << (ok ? "" : " style=\"color:#b00\"") << ">" << fmt(o["error_m"]) << "</td><td>"
-        << o["frames_top_seen"].get<int>() << "</td><td>" << o["cells"].get<std::size_t>() << "</td><td style=\"text-align:left\">"
+        << o["frames_top_seen"].get<int>() << " (" << o["frames_lower_part_seen_with_top"].get<int>() << ")</td><td>"
+        << o["cells"].get<std::size_t>() << "</td><td style=\"text-align:left\">"
         << (o.contains("estimation_outcomes") ? largest(o["estimation_outcomes"]) : "") << "</td><td style=\"text-align:left\">";
       if (o.contains("crown") && o["crown"].is_object())
         h << largest(o["crown"]["outcomes"]) << ": " << o["crown"]["verdict"].get<std::string>();

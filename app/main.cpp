@@ -207,6 +207,12 @@ void printScorecard(const nlohmann::json& r) {
                 << " -> " << t["too_high_after"].get<std::size_t>() << "; top MAE " << t["before"]["mae_m"].get<double>()
                 << " -> " << t["after"]["mae_m"].get<double>() << " m);";
     }
+    std::cout << "\n    of those, seen in a frame with their lower part (where the lidar reaches):";
+    for (const char* k : {"building", "tree"}) {
+      const auto& w = h["object_tops"][k]["lower_part_seen_with_top"];
+      std::cout << " " << k << "s " << w["at_height_before"].get<std::size_t>() << " -> "
+                << w["at_height_after"].get<std::size_t>() << " of " << w["objects"].get<std::size_t>() << ";";
+    }
     std::cout << "\n";
   }
   if (r["height_baselines"].contains("inpainting")) {

@@ -8,6 +8,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <limits>
+#include <set>
 
 namespace terrain::eval {
 
@@ -108,34 +110,45 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
   return out;
 }
 
-std::map<std::string, int> topSeenFrames(const sim::World& world, const CameraIntrinsics& k,
-                                         const std::vector<CameraTruthFrame>& frames) {
+std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const CameraIntrinsics& k,
+                                                  const std::vector<CameraTruthFrame>& frames) {
   // geom -> its object
   std::map<int, const scenes::ObjectTruth*> object_of;
   for (const auto& o : world.truth().objects) {
     for (const auto& g : o.geoms) object_of[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = &o;
   }
-  std::map<std::string, int> out;
+  std::map<std::string, TopSightings> out;
   for (const auto& f : frames) {
     const cv::Mat& seg = f.segmentation;
     const Eigen::Vector3d origin = f.world_from_camera.translation();
-    std::map<std::string, bool> seen;
-    for (int v = 1; v < seg.rows; ++v) {
+    // the height of the point the pixel looks at if it lies on geom g; NaN if another geom hides it
+    const auto heightSeen = [&](int u, int v, int g) {
+      const Eigen::Vector3d dir = f.world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5));
+      const sim::RayHit hit = world.castRay(origin, dir);
+      return hit.geom == g ? origin.z() + hit.distance * dir.z() : std::numeric_limits<double>::quiet_NaN();
+    };
+    std::set<std::string> tops, bases;
+    for (int v = 0; v < seg.rows; ++v) {
       for (int u = 0; u < seg.cols; ++u) {
         const int g = seg.at<std::uint16_t>(v, u) - 1;
-        if (g == seg.at<std::uint16_t>(v - 1, u) - 1) continue;
         const auto it = object_of.find(g);
-        if (it == object_of.end() || seen.count(it->second->id)) continue;
-        // the point the pixel looks at, on the object
+        if (it == object_of.end()) continue;
         const scenes::ObjectTruth& o = *it->second;
-        const Eigen::Vector3d dir = f.world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5));
-        const sim::RayHit hit = world.castRay(origin, dir);
-        if (hit.geom != g) continue;
-        const double z = origin.z() + hit.distance * dir.z();
-        if (z >= o.top_height - std::max(1.0, 0.15 * (o.top_height - o.base_height))) seen[o.id] = true;
+        // a top boundary pixel looking at the object's top
+        if (v > 0 && g != seg.at<std::uint16_t>(v - 1, u) - 1 && !tops.count(o.id) &&
+            heightSeen(u, v, g) >= o.top_height - std::max(1.0, 0.15 * (o.top_height - o.base_height)))
+          tops.insert(o.id);
+        // a bottom boundary pixel looking at the object's lower part
+        if (v + 1 < seg.rows && g != seg.at<std::uint16_t>(v + 1, u) - 1 && !bases.count(o.id) &&
+            heightSeen(u, v, g) <= o.base_height + kLowerPart)
+          bases.insert(o.id);
       }
     }
-    for (const auto& [id, yes] : seen) out[id] += yes;
+    for (const auto& id : tops) {
+      TopSightings& s = out[id];
+      ++s.top;
+      s.with_lower_part += bases.count(id) > 0;
+    }
   }
   return out;
 }
@@ -219,13 +232,21 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
   // the tops of the objects whose top the camera saw: do they stand at their real height?
   {
-    const std::map<std::string, int> seen = topSeenFrames(world, pipeline.calibration().camera, truth.cameras);
+    const std::map<std::string, TopSightings> seen = topSeenFrames(world, pipeline.calibration().camera, truth.cameras);
     json& tops = hr["object_tops"];
     json& list = tops["list"] = json::object();
     // per class: objects seen, at their real height and above it by more than the tolerance, sensed
-    // only (before) and recovered (after)
-    struct Sum {
+    // only (before) and recovered (after); and the same over those seen with their lower part
+    struct Count {
       std::size_t seen = 0, before = 0, after = 0, high_before = 0, high_after = 0;
+      void add(double eb, double ea, double tol) {
+        ++seen;
+        before += std::abs(eb) <= tol, after += std::abs(ea) <= tol;
+        high_before += eb > tol, high_after += ea > tol;
+      }
+    };
+    struct Sum {
+      Count all, with_lower_part;
       std::vector<double> e_before, e_after;
     };
     std::map<std::string, Sum> sums = {{"building", {}}, {"tree", {}}};
@@ -259,15 +280,15 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       const double eb = std::isfinite(t.sensed) ? t.sensed - t.top : -(t.top - t.base);
       const double ea = std::isfinite(t.recovered) ? t.recovered - t.top : eb;
       Sum& s = sums[t.building ? "building" : "tree"];
-      ++s.seen;
-      s.before += std::abs(eb) <= tol, s.after += std::abs(ea) <= tol;
-      s.high_before += eb > tol, s.high_after += ea > tol;
+      s.all.add(eb, ea, tol);
+      if (it->second.with_lower_part > 0) s.with_lower_part.add(eb, ea, tol);
       s.e_before.push_back(eb), s.e_after.push_back(ea);
       json outcomes = json::object();
       for (std::size_t k = 0; k < kEstimateOutcomes; ++k) outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = t.outcomes[k];
       list[id] = {{"class", t.building ? "building" : "tree"}, {"true_top_m", t.top}, {"sensed_top_m", t.sensed},
                   {"recovered_top_m", t.recovered}, {"error_m", ea}, {"tolerance_m", tol},
-                  {"frames_top_seen", it->second}, {"cells", t.cells}, {"estimation_outcomes", outcomes}};
+                  {"frames_top_seen", it->second.top}, {"frames_lower_part_seen_with_top", it->second.with_lower_part},
+                  {"cells", t.cells}, {"estimation_outcomes", outcomes}};
       if (!t.building) {
         json& crown = list[id]["crown"];
         if (const auto tc = crown_of.find(id); tc != crown_of.end()) {
@@ -279,9 +300,14 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       }
     }
     for (const auto& [kind, s] : sums) {
-      tops[kind] = {{"top_seen", s.seen}, {"at_height_before", s.before}, {"at_height_after", s.after},
-                    {"too_high_before", s.high_before}, {"too_high_after", s.high_after},
-                    {"before", errorJson(errorStats(s.e_before))}, {"after", errorJson(errorStats(s.e_after))}};
+      const Count& a = s.all;
+      const Count& w = s.with_lower_part;
+      tops[kind] = {{"top_seen", a.seen}, {"at_height_before", a.before}, {"at_height_after", a.after},
+                    {"too_high_before", a.high_before}, {"too_high_after", a.high_after},
+                    {"before", errorJson(errorStats(s.e_before))}, {"after", errorJson(errorStats(s.e_after))},
+                    {"lower_part_seen_with_top",
+                     {{"objects", w.seen}, {"at_height_before", w.before}, {"at_height_after", w.after},
+                      {"too_high_before", w.high_before}, {"too_high_after", w.high_after}}}};
     }
     tops["frames"] = truth.cameras.size();
   }

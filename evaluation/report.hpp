@@ -51,11 +51,25 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
                                   const sim::World& world, const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame,
                                   int tolerance);
 
+// How high above its base [m] an object's lower part reaches: the part a vehicle's lidar, capped a
+// little above its roof (1.5 m above a sensor 1.8 m up by default), senses and the method raises.
+constexpr double kLowerPart = 3.0;
+
+// The kept camera frames that saw an object's top, and of them those that also saw its lower part.
+// The method can only raise an object from a frame that sees both: its sensed vertices are in the
+// lower part, and their top boundary above them.
+struct TopSightings {
+  int top = 0;
+  int with_lower_part = 0;
+};
+
 // The kept camera frames that saw each object's top, by object id: frames in which a top-boundary
 // pixel of the object (as in boundaryCoverage) looks at a point of it no more than 15 % of its
-// height, and at least 1 m, below its highest point. Objects whose top no frame saw are absent.
-std::map<std::string, int> topSeenFrames(const sim::World& world, const CameraIntrinsics& intrinsics,
-                                         const std::vector<CameraTruthFrame>& frames);
+// height, and at least 1 m, below its highest point; with_lower_part counts those in which also a
+// bottom-boundary pixel of the object (its lower neighbour another object, the ground or the sky)
+// looks at a point of it within kLowerPart of its base. Objects whose top no frame saw are absent.
+std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const CameraIntrinsics& intrinsics,
+                                                  const std::vector<CameraTruthFrame>& frames);
 
 struct EvaluationOptions {
   // score the ground segmentation baselines (fixed band, RANSAC plane, PCL's progressive

@@ -125,16 +125,22 @@ TEST(ObjectTopTest, AnObjectsTopIsThe95thPercentileOfItsCellsHeights) {
 
 // A camera 1.6 m up looking east at the 20 m wall: from 40 m its top edge is in the image (the
 // pixels just below it look at the wall's top), from 8 m it is above the image (the topmost wall
-// pixels look at it 1.6 + 8 tan 30 deg = 6.2 m up, far below its top).
-TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtIt) {
+// pixels look at it 1.6 + 8 tan 30 deg = 6.2 m up, far below its top). Level, the camera sees the
+// wall's foot as well; tilted up 35 deg it sees 40 tan 5 deg + 1.6 = 5.1 m up and higher, the wall's
+// top but not its lower part.
+TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtItItsLowerPartWhenItsFootIsInView) {
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(160, 120, 60 * M_PI / 180);
-  std::vector<CameraTruthFrame> frames;
-  for (const double distance : {40.0, 8.0}) {
-    const auto world = test::wallWorld(distance);
+  struct Case {
+    double distance, pitch_deg;
+    int top, with_lower_part;  // -1: the top not seen
+  };
+  for (const Case c : {Case{40, 0, 1, 1}, Case{8, 0, -1, -1}, Case{40, 35, 1, 0}}) {
+    const auto world = test::wallWorld(c.distance);
+    const double p = c.pitch_deg * M_PI / 180;
     CameraTruthFrame f;
-    f.world_from_camera.linear().col(0) = Vector3(0, -1, 0);  // right = south
-    f.world_from_camera.linear().col(1) = Vector3(0, 0, -1);  // down
-    f.world_from_camera.linear().col(2) = Vector3(1, 0, 0);   // forward = east
+    f.world_from_camera.linear().col(0) = Vector3(0, -1, 0);                     // right = south
+    f.world_from_camera.linear().col(1) = Vector3(std::sin(p), 0, -std::cos(p));  // down
+    f.world_from_camera.linear().col(2) = Vector3(std::cos(p), 0, std::sin(p));   // forward: east, tilted up
     f.world_from_camera.translation() = Vector3(0, 0, 1.6);
     // the true segmentation: the geom each pixel sees, + 1 (0: sky)
     f.segmentation = cv::Mat(k.height, k.width, CV_16UC1, cv::Scalar(0));
@@ -146,10 +152,11 @@ TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtIt) {
       }
     }
     const auto seen = topSeenFrames(*world, k, {f});
-    EXPECT_EQ(seen.count("wall"), distance > 20 ? 1u : 0u) << distance;
-    if (distance > 20) {
-      EXPECT_EQ(seen.at("wall"), 1);
-    }
+    SCOPED_TRACE(testing::Message() << c.distance << " m, tilted " << c.pitch_deg << " deg");
+    ASSERT_EQ(seen.count("wall"), c.top < 0 ? 0u : 1u);
+    if (c.top < 0) continue;
+    EXPECT_EQ(seen.at("wall").top, c.top);
+    EXPECT_EQ(seen.at("wall").with_lower_part, c.with_lower_part);
   }
 }
 
