@@ -114,6 +114,16 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     << title << "</h1><p>" << r.value("frames", 0) << " frames, " << r.value("voxels", 0) << " voxels. Scene: "
     << world.truth().type << " (seed " << world.truth().seed << ").</p>";
   // metrics
+  if (r.contains("pose") && r["pose"].value("frames", 0) > 0) {
+    const auto& pose = r["pose"];
+    h << "<h2>Pose</h2><p>At the " << pose["frames"].get<int>() << " kept camera frames, the final pose against the "
+      << "true one.</p><table><tr><th>error</th><th>median</th><th>max</th></tr>";
+    for (const char* k :
+         {"horizontal_error_m", "vertical_error_m", "heading_error_deg", "pitch_error_deg", "roll_error_deg"})
+      h << "<tr><td style=\"text-align:left\">" << k << "</td><td>" << fmt(pose[k]["median"]) << "</td><td>"
+        << fmt(pose[k]["max"]) << "</td></tr>";
+    h << "</table>";
+  }
   h << "<h2>Ground segmentation</h2><table><tr><th>method</th><th>F1</th><th>IoU</th><th>precision</th><th>recall</th>"
        "<th>F1 per point</th></tr>";
   for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {

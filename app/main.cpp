@@ -149,7 +149,20 @@ void applyChoices(PipelineConfig& c, const std::string& histogram, const std::st
 
 // the scorecard on the terminal, from the report
 void printScorecard(const nlohmann::json& r) {
-  std::cout << std::fixed << std::setprecision(3) << "scorecard\n  ground segmentation per voxel    F1     IoU    precision  recall\n";
+  std::cout << std::fixed << std::setprecision(3) << "scorecard\n";
+  if (r.contains("pose") && r["pose"]["frames"].get<std::size_t>() > 0) {
+    const auto& p = r["pose"];
+    std::cout << "  pose at " << p["frames"].get<std::size_t>() << " kept camera frames, error median (max):";
+    for (const auto& [key, what] : {std::pair<const char*, const char*>{"horizontal_error_m", "m across"},
+                                    {"vertical_error_m", "m up"},
+                                    {"heading_error_deg", "deg heading"},
+                                    {"pitch_error_deg", "deg pitch"},
+                                    {"roll_error_deg", "deg roll"}}) {
+      std::cout << " " << p[key]["median"].get<double>() << " (" << p[key]["max"].get<double>() << ") " << what << ";";
+    }
+    std::cout << "\n";
+  }
+  std::cout << "  ground segmentation per voxel    F1     IoU    precision  recall\n";
   for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
     if (!r["ground_segmentation"].contains(m)) continue;  // baselines not asked for
     const auto& g = r["ground_segmentation"][m];

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 
@@ -17,7 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr char kMagic[] = "terrain-run-state/3\n";
+constexpr char kMagic[] = "terrain-run-state/4\n";
 
 // little-endian machine layout of plain values, appended to a byte string
 class Out {
@@ -107,6 +108,7 @@ void putRecord(Out& o, const FrameRecord& r) {
   o.put<std::uint64_t>(r.points), o.put<std::uint64_t>(r.new_voxels), o.put<std::uint64_t>(r.voxels);
   o.put<std::int32_t>(r.estimated_vertices);
   o.put(r.position.x()), o.put(r.position.y()), o.put(r.position.z());
+  o.put(r.attitude.w()), o.put(r.attitude.x()), o.put(r.attitude.y()), o.put(r.attitude.z());
 }
 FrameRecord getRecord(In& in) {
   FrameRecord r;
@@ -118,6 +120,11 @@ FrameRecord getRecord(In& in) {
   r.estimated_vertices = in.get<std::int32_t>("record");
   const double x = in.get<double>("record"), y = in.get<double>("record"), z = in.get<double>("record");
   r.position = Point3(x, y, z);
+  const double qw = in.get<double>("record"), qx = in.get<double>("record"), qy = in.get<double>("record"),
+               qz = in.get<double>("record");
+  const Rotation q(qw, qx, qy, qz);
+  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1) > 1e-6) in.fail("record attitude is not a unit quaternion");
+  r.attitude = q;
   return r;
 }
 
@@ -248,7 +255,7 @@ SavedRun readRunState(const fs::path& out) {
   s.ground_height = p.getAll<float>("ground heights");
   s.energy_rough = p.get<double>("energies"), s.energy_refined = p.get<double>("energies");
   s.iterations = p.get<std::int32_t>("segmentation"), s.tiles = p.get<std::int32_t>("segmentation");
-  std::vector<FrameRecord> records(static_cast<std::size_t>(p.count("records", 100)));
+  std::vector<FrameRecord> records(static_cast<std::size_t>(p.count("records", 152)));
   for (auto& r : records) r = getRecord(p);
   std::vector<CrownRecord> crowns(static_cast<std::size_t>(p.count("crown records", 13 + 2 * kCrownOutcomes)));
   for (auto& c : crowns) {

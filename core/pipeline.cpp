@@ -103,7 +103,11 @@ void Pipeline::finish() {
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
   crowns_.apply(mesh_, map_, config_.crown);
-  for (auto& r : records_) r.position = poses_.worldFromVehicle(r.time).translation();
+  for (auto& r : records_) {
+    const Pose pose = poses_.worldFromVehicle(r.time);
+    r.position = pose.translation();
+    r.attitude = Rotation(pose.linear());
+  }
   if (!map_.voxels().empty()) {
     std::size_t ground = 0;
     for (auto g : segmentation_.refined) ground += g;

@@ -40,6 +40,7 @@ struct FrameRecord {
   int estimated_vertices = 0;
   std::size_t resident_bytes = 0;  // the process's resident memory after the frame (0: unknown)
   Point3 position = Point3::Zero();  // [m] estimated vehicle position at `time`, from the final poses (set by finish())
+  Rotation attitude = Rotation::Identity();  // estimated world_from_vehicle rotation at `time`, likewise
 };
 
 class Pipeline {

@@ -54,4 +54,18 @@ Percentiles percentiles(std::vector<double> v) {
   return p;
 }
 
+PoseError poseError(const Pose& estimated, const Pose& truth) {
+  PoseError e;
+  const Vector3 d = estimated.translation() - truth.translation();
+  e.horizontal = d.head<2>().norm();
+  e.vertical = std::abs(d.z());
+  const Vector3 fe = estimated.linear() * Vector3::UnitX(), ft = truth.linear() * Vector3::UnitX();
+  const Vector3 le = estimated.linear() * Vector3::UnitY(), lt = truth.linear() * Vector3::UnitY();
+  const auto elevation = [](const Vector3& v) { return std::asin(std::clamp(v.z(), -1.0, 1.0)); };
+  e.heading = std::abs(std::remainder(std::atan2(fe.y(), fe.x()) - std::atan2(ft.y(), ft.x()), 2 * M_PI));
+  e.pitch = std::abs(elevation(fe) - elevation(ft));
+  e.roll = std::abs(elevation(le) - elevation(lt));
+  return e;
+}
+
 }  // namespace terrain::eval

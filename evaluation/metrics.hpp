@@ -1,6 +1,8 @@
 #pragma once
 // Pure metric functions: no files, no printing. Executables call them and write reports.
 
+#include "core/types.hpp"
+
 #include <cstddef>
 #include <vector>
 
@@ -33,5 +35,15 @@ struct Percentiles {
   double median = 0, p95 = 0;
 };
 Percentiles percentiles(std::vector<double> values);
+
+// How far an estimated vehicle pose (world_from_vehicle; x forward, y left, z up) lies from the
+// true one, each as an absolute value: the position's horizontal and vertical offsets [m]; the
+// heading (the forward axis' azimuth), pitch (its elevation) and roll (the left axis' elevation)
+// differences [rad].
+struct PoseError {
+  double horizontal = 0, vertical = 0;
+  double heading = 0, pitch = 0, roll = 0;
+};
+PoseError poseError(const Pose& estimated, const Pose& truth);
 
 }  // namespace terrain::eval

@@ -7,8 +7,10 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 
 namespace terrain::eval {
@@ -153,6 +155,35 @@ std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const
   return out;
 }
 
+json poseJson(const Pipeline& pipeline, const RunTruth& truth) {
+  // the true vehicle pose at each kept camera frame (its exposure is at the sweep's start, the
+  // record's time) against the pipeline's final pose then
+  std::map<int, const FrameRecord*> record_of;
+  for (const auto& rec : pipeline.records()) record_of[rec.frame] = &rec;
+  const Pose camera_to_vehicle = pipeline.calibration().vehicle_from_camera.inverse();
+  std::vector<double> horizontal, vertical, heading, pitch, roll;
+  for (const auto& c : truth.cameras) {
+    const auto it = record_of.find(c.frame);
+    if (it == record_of.end()) continue;
+    Pose estimated = Pose::Identity();
+    estimated.linear() = it->second->attitude.toRotationMatrix();
+    estimated.translation() = it->second->position;
+    const PoseError e = poseError(estimated, c.world_from_camera * camera_to_vehicle);
+    horizontal.push_back(e.horizontal), vertical.push_back(e.vertical);
+    constexpr double kToDegrees = 180 / M_PI;
+    heading.push_back(e.heading * kToDegrees), pitch.push_back(e.pitch * kToDegrees), roll.push_back(e.roll * kToDegrees);
+  }
+  const auto stats = [](const std::vector<double>& v) {
+    return json{{"median", percentiles(v).median}, {"max", v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())}};
+  };
+  return {{"frames", horizontal.size()},
+          {"horizontal_error_m", stats(horizontal)},
+          {"vertical_error_m", stats(vertical)},
+          {"heading_error_deg", stats(heading)},
+          {"pitch_error_deg", stats(pitch)},
+          {"roll_error_deg", stats(roll)}};
+}
+
 json timingJson(const std::vector<FrameRecord>& records) {
   std::map<std::string, std::vector<double>> stages;
   for (const auto& r : records) {
@@ -182,6 +213,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   const auto& seg = pipeline.segmentation();
   r["frames"] = pipeline.records().size();
   r["voxels"] = map.size();
+  r["pose"] = poseJson(pipeline, truth);
 
   // ground segmentation: histogram, both GMRF solvers, the baselines
   GroundSegmentationConfig other = pipeline.config().ground;

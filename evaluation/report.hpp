@@ -85,6 +85,11 @@ nlohmann::json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, cons
 // Flattens a report into "a.b.c" -> number for the numeric leaves.
 std::map<std::string, double> flattenMetrics(const nlohmann::json& report);
 
+// The pipeline's final vehicle poses at the kept camera frames against the true ones: "frames"
+// compared, and the median and max of the absolute horizontal and vertical position errors [m]
+// and heading, pitch and roll errors [deg] (eval::poseError).
+nlohmann::json poseJson(const Pipeline& pipeline, const RunTruth& truth);
+
 // Timing summary of a pipeline's records: stage -> (median, p95) [ms].
 nlohmann::json timingJson(const std::vector<FrameRecord>& records);
 

@@ -43,6 +43,39 @@ TEST(MetricsTest, Percentiles) {
   EXPECT_DOUBLE_EQ(p.p95, 95);
 }
 
+// A vehicle at (10, 20, 1) heading 179 deg (just short of west), level, against estimates off by
+// one thing each: the heading difference wraps (-179 deg is 2 deg away, not 358), a nose-up tilt is
+// pitch and a lean to the side is roll, and a shifted position splits into across and up.
+TEST(MetricsTest, PoseErrorSplitsPositionAndAttitude) {
+  constexpr double kDeg = M_PI / 180;
+  const auto pose = [](double yaw, double pitch_up, double roll, const Vector3& at) {
+    Pose p = Pose::Identity();
+    p.linear() = (Eigen::AngleAxisd(yaw, Vector3::UnitZ()) * Eigen::AngleAxisd(-pitch_up, Vector3::UnitY()) *
+                  Eigen::AngleAxisd(roll, Vector3::UnitX()))
+                     .toRotationMatrix();
+    p.translation() = at;
+    return p;
+  };
+  const Vector3 at(10, 20, 1);
+  const Pose truth = pose(179 * kDeg, 0, 0, at);
+  const PoseError same = poseError(truth, truth);
+  EXPECT_EQ(same.horizontal + same.vertical + same.heading + same.pitch + same.roll, 0.0);
+  const PoseError turned = poseError(pose(-179 * kDeg, 0, 0, at + Vector3(3, -4, -1)), truth);
+  EXPECT_NEAR(turned.horizontal, 5, 1e-12);
+  EXPECT_NEAR(turned.vertical, 1, 1e-12);
+  EXPECT_NEAR(turned.heading, 2 * kDeg, 1e-12);
+  EXPECT_NEAR(turned.pitch, 0, 1e-12);
+  EXPECT_NEAR(turned.roll, 0, 1e-12);
+  const PoseError tilted = poseError(pose(179 * kDeg, 2 * kDeg, 0, at), truth);
+  EXPECT_NEAR(tilted.pitch, 2 * kDeg, 1e-12);
+  EXPECT_NEAR(tilted.heading, 0, 1e-12);
+  EXPECT_NEAR(tilted.roll, 0, 1e-12);
+  const PoseError leaning = poseError(pose(179 * kDeg, 0, 3 * kDeg, at), truth);
+  EXPECT_NEAR(leaning.roll, 3 * kDeg, 1e-12);
+  EXPECT_NEAR(leaning.heading, 0, 1e-12);
+  EXPECT_NEAR(leaning.pitch, 0, 1e-12);
+}
+
 }  // namespace
 }  // namespace terrain::eval
 
