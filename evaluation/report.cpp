@@ -133,16 +133,18 @@ std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const
     for (int v = 0; v < seg.rows; ++v) {
       for (int u = 0; u < seg.cols; ++u) {
         const int g = seg.at<std::uint16_t>(v, u) - 1;
+        const bool top_edge = v > 0 && g != seg.at<std::uint16_t>(v - 1, u) - 1;
+        const bool bottom_edge = v + 1 < seg.rows && g != seg.at<std::uint16_t>(v + 1, u) - 1;
+        if (!top_edge && !bottom_edge) continue;
         const auto it = object_of.find(g);
         if (it == object_of.end()) continue;
         const scenes::ObjectTruth& o = *it->second;
         // a top boundary pixel looking at the object's top
-        if (v > 0 && g != seg.at<std::uint16_t>(v - 1, u) - 1 && !tops.count(o.id) &&
+        if (top_edge && !tops.count(o.id) &&
             heightSeen(u, v, g) >= o.top_height - std::max(1.0, 0.15 * (o.top_height - o.base_height)))
           tops.insert(o.id);
         // a bottom boundary pixel looking at the object's lower part
-        if (v + 1 < seg.rows && g != seg.at<std::uint16_t>(v + 1, u) - 1 && !bases.count(o.id) &&
-            heightSeen(u, v, g) <= o.base_height + kLowerPart)
+        if (bottom_edge && !bases.count(o.id) && heightSeen(u, v, g) <= o.base_height + kLowerPart)
           bases.insert(o.id);
       }
     }
