@@ -1,5 +1,6 @@
 #include "core/pose_estimation.hpp"
 
+#include "evaluation/metrics.hpp"
 #include "scenes/scene_generator.hpp"
 #include "sim/simulated_rig.hpp"
 #include "tests/test_support.hpp"
@@ -25,14 +26,10 @@ struct Drive {
     AttitudeError e;
     for (const auto& p : truth) {
       if (p.time < from || p.time > to) continue;
-      const Eigen::Matrix3d est = poses.worldFromVehicle(p.time).linear(), tru = p.world_from_vehicle.linear();
-      const Vector3 fe = est * Vector3::UnitX(), ft = tru * Vector3::UnitX();
-      const Vector3 le = est * Vector3::UnitY(), lt = tru * Vector3::UnitY();
-      double dh = std::atan2(fe.y(), fe.x()) - std::atan2(ft.y(), ft.x());
-      dh = std::remainder(dh, 2 * M_PI);
-      e.heading = std::max(e.heading, std::abs(dh));
-      e.pitch = std::max(e.pitch, std::abs(std::asin(fe.z()) - std::asin(ft.z())));
-      e.roll = std::max(e.roll, std::abs(std::asin(le.z()) - std::asin(lt.z())));
+      const eval::PoseError d = eval::poseError(poses.worldFromVehicle(p.time), p.world_from_vehicle);
+      e.heading = std::max(e.heading, d.heading);
+      e.pitch = std::max(e.pitch, d.pitch);
+      e.roll = std::max(e.roll, d.roll);
     }
     return e;
   }
