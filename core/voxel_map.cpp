@@ -1,5 +1,6 @@
 #include "core/voxel_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace terrain {
@@ -91,33 +92,55 @@ std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t fr
   const std::size_t before = voxels_.size();
   const double limit = static_cast<double>(kOffset - 1) * size_;
   if (voxel_of) voxel_of->assign(points.size(), kNoVoxel);
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    const Point3& p = points[k];
-    if (!p.allFinite() || p.cwiseAbs().maxCoeff() >= limit) continue;
-    const VoxelIndex index = indexOf(p);
-    if (2 * (voxels_.size() + 1) > slots_.size()) grow();
-    const std::size_t mask = slots_.size() - 1;
-    std::size_t s = hashKey(pack(index)) & mask;
-    while (slots_[s] != kEmpty && voxels_[slots_[s]].index != index) s = (s + 1) & mask;
-    if (slots_[s] == kEmpty) {
-      slots_[s] = static_cast<std::uint32_t>(voxels_.size());
-      if (voxels_.empty()) lowest_ = highest_ = index;
-      lowest_ = lowest_.cwiseMin(index), highest_ = highest_.cwiseMax(index);
-      Voxel v;
-      v.index = index;
-      voxels_.push_back(v);
-      new_voxels_.push_back(slots_[s]);
+  // In blocks of points: first every point's index and hash (no memory but the points'), then the
+  // look-ups in point order, each slot and its voxel fetched from memory a few points ahead, so
+  // that the table's cache misses overlap instead of following one another.
+  constexpr std::size_t kBlock = 256, kSlotAhead = 16, kVoxelAhead = 8;
+  constexpr std::uint64_t kSkip = ~std::uint64_t{0};  // hash of a point left out
+  std::array<VoxelIndex, kBlock> index;
+  std::array<std::uint64_t, kBlock> hash;
+  for (std::size_t first = 0; first < points.size(); first += kBlock) {
+    const std::size_t count = std::min(kBlock, points.size() - first);
+    for (std::size_t j = 0; j < count; ++j) {
+      const Point3& p = points[first + j];
+      const bool keep = p.allFinite() && p.cwiseAbs().maxCoeff() < limit;
+      index[j] = keep ? indexOf(p) : VoxelIndex::Zero();
+      hash[j] = keep ? hashKey(pack(index[j])) : kSkip;
     }
-    if (voxel_of) (*voxel_of)[k] = slots_[s];
-    Voxel& v = voxels_[slots_[s]];
-    // running mean of the points' heights
-    v.hits += 1;
-    v.height += static_cast<float>((p.z() - v.height) / v.hits);
-    v.frame = frame;
-    if (colours && (*colours)[k][3]) {
-      const auto& c = (*colours)[k];
-      v.r = c[0], v.g = c[1], v.b = c[2];
-      v.coloured = true;
+    for (std::size_t j = 0; j < count; ++j) {
+      if (hash[j] != kSkip && 2 * (voxels_.size() + 1) > slots_.size()) grow();
+      const std::size_t mask = slots_.size() - 1;
+      if (j + kSlotAhead < count && hash[j + kSlotAhead] != kSkip)
+        __builtin_prefetch(&slots_[hash[j + kSlotAhead] & mask]);
+      if (j + kVoxelAhead < count && hash[j + kVoxelAhead] != kSkip) {
+        const std::uint32_t id = slots_[hash[j + kVoxelAhead] & mask];
+        if (id != kEmpty) __builtin_prefetch(&voxels_[id]);
+      }
+      if (hash[j] == kSkip) continue;
+      const std::size_t k = first + j;
+      const Point3& p = points[k];
+      std::size_t s = hash[j] & mask;
+      while (slots_[s] != kEmpty && voxels_[slots_[s]].index != index[j]) s = (s + 1) & mask;
+      if (slots_[s] == kEmpty) {
+        slots_[s] = static_cast<std::uint32_t>(voxels_.size());
+        if (voxels_.empty()) lowest_ = highest_ = index[j];
+        lowest_ = lowest_.cwiseMin(index[j]), highest_ = highest_.cwiseMax(index[j]);
+        Voxel v;
+        v.index = index[j];
+        voxels_.push_back(v);
+        new_voxels_.push_back(slots_[s]);
+      }
+      if (voxel_of) (*voxel_of)[k] = slots_[s];
+      Voxel& v = voxels_[slots_[s]];
+      // running mean of the points' heights
+      v.hits += 1;
+      v.height += static_cast<float>((p.z() - v.height) / v.hits);
+      v.frame = frame;
+      if (colours && (*colours)[k][3]) {
+        const auto& c = (*colours)[k];
+        v.r = c[0], v.g = c[1], v.b = c[2];
+        v.coloured = true;
+      }
     }
   }
   return voxels_.size() - before;

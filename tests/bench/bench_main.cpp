@@ -96,6 +96,62 @@ void BM_LidarRays_Accelerated(benchmark::State& state) {
 }
 BENCHMARK(BM_LidarRays_Accelerated)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// the points of the sweep of sweepRays() as the lidar returns them (hits within the HDL-64E's 120 m)
+const std::vector<Point3>& sweepPoints() {
+  static const std::vector<Point3> points = [] {
+    const auto& w = urbanWorld();
+    const sim::RayCaster caster(w.model(), w.data(), w.robotBody());
+    const Rays& rays = sweepRays();
+    std::vector<Point3> out;
+    for (std::size_t k = 0; k < rays.dir.size(); ++k) {
+      const sim::RayHit hit = caster.cast(rays.origin[k], rays.dir[k]);
+      if (hit.geom >= 0 && hit.distance <= 120.0) out.push_back(rays.origin[k] + hit.distance * rays.dir[k]);
+    }
+    return out;
+  }();
+  return points;
+}
+
+// one frame's voxel insertion on a moving robot: the sweep, moved on by 0.5 m per frame, into a
+// map that holds the ten sweeps before it. Arg 1: VoxelMap::insert; arg 0: the straightforward
+// way, a std::unordered_map from packed voxel index to voxel (the baseline).
+void BM_VoxelInsert(benchmark::State& state) {
+  const std::vector<Point3>& sweep = sweepPoints();
+  const auto moved = [&](double dx) {
+    std::vector<Point3> p(sweep);
+    for (auto& q : p) q.x() += dx;
+    return p;
+  };
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::unordered_map<std::uint64_t, Voxel> hashed;
+  const auto insertHashed = [&](const std::vector<Point3>& points, std::uint32_t frame) {
+    for (const Point3& p : points) {
+      const VoxelIndex i = map.indexOf(p);
+      Voxel& v = hashed[VoxelMap::pack(i)];
+      v.index = i;
+      v.hits += 1;
+      v.height += static_cast<float>((p.z() - v.height) / v.hits);
+      v.frame = frame;
+    }
+  };
+  const bool optimised = state.range(0) == 1;
+  std::uint32_t frame = 0;
+  for (; frame < 10; ++frame) {
+    const std::vector<Point3> p = moved(0.5 * frame);
+    if (optimised) map.insert(p, frame); else insertHashed(p, frame);
+  }
+  for (auto _ : state) {
+    state.PauseTiming();
+    const std::vector<Point3> p = moved(0.5 * frame);
+    state.ResumeTiming();
+    if (optimised) map.insert(p, frame); else insertHashed(p, frame);
+    ++frame;
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(sweep.size()));
+  state.counters["voxels"] = static_cast<double>(optimised ? map.size() : hashed.size());
+}
+BENCHMARK(BM_VoxelInsert)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);
+
 // a voxel map of about 1.8 M voxels: 1.2 M ground voxels of rolling terrain, walls, noise
 VoxelMap& bigMap() {
   static std::unique_ptr<VoxelMap> map = [] {
@@ -400,6 +456,12 @@ int main(int argc, char** argv) {
     std::printf("%-44s %11.1f ms %16s %12s\n",
                 ("incremental update, " + std::to_string(static_cast<long>(r->counters.at("new_voxels"))) + " new voxels").c_str(),
                 ms(*r), "<= 10 ms", "");
+  }
+  if (const auto* r = get("BM_VoxelInsert/1/")) {
+    const auto* base = get("BM_VoxelInsert/0/");
+    std::printf("%-44s %11.2f ms %16s %11.1fx\n", ("voxel insertion, one sweep of " + std::to_string(static_cast<long>(perSecond(*r) * ms(*r) / 1e3 + 0.5)) + " points").c_str(),
+                ms(*r), "", base ? ms(*base) / ms(*r) : 0.0);
+    if (base) std::printf("%-44s %11.2f ms %16s %12s\n", "voxel insertion, std::unordered_map (baseline)", ms(*base), "", "1.0x");
   }
   if (const auto* r = get("BM_CameraRender")) std::printf("%-44s %10.1f f/s %16s %12s\n", "camera 640x480 (RGB, depth, segmentation)", perSecond(*r), ">= 10 f/s", "");
   if (const auto* r = get("BM_PipelineStreaming")) {

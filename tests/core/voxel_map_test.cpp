@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include "core/random.hpp"
+
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace terrain {
 namespace {
@@ -33,6 +37,66 @@ TEST(VoxelMapTest, InsertGivesEachPointItsVoxel) {
     EXPECT_EQ(static_cast<std::int64_t>(voxel_of[i]), map.find(map.indexOf(second[i])));
   EXPECT_EQ(map.voxels()[0].hits, 3u);
   EXPECT_EQ(map.voxels()[1].hits, 2u);
+}
+
+// Many points at once, across the hash table's growth: every voxel gets the id of its first point
+// in insert order, and the hits, mean height, frame and colour of its points, as a plain ordered map
+// from index to voxel gives them; points left out anywhere in the stream leave no voxel.
+TEST(VoxelMapTest, ManyPointsGiveTheVoxelsOfAPlainMap) {
+  VoxelMap map(VoxelMapConfig{0.25});
+  std::map<std::array<int, 3>, std::uint32_t> id_of;  // the reference
+  std::vector<Voxel> expected;
+  Random rng(7);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::uint32_t frame = 0; frame < 3; ++frame) {
+    std::vector<Point3> points;
+    std::vector<std::array<std::uint8_t, 4>> colours;
+    for (int i = 0; i < 60000; ++i) {
+      // a clustered cloud: most voxels are hit again, many are new
+      Point3 p(30 * rng.uniform() - 15, 30 * rng.uniform() - 15, 2 * rng.normal());
+      if (i % 997 == 0) p.x() = nan;
+      if (i % 1499 == 0) p.y() = 1e12;
+      points.push_back(p);
+      colours.push_back({static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(frame), 7, static_cast<std::uint8_t>(i % 3)});
+    }
+    std::vector<std::uint32_t> voxel_of;
+    const std::size_t before = expected.size();
+    const std::size_t created = map.insert(points, frame, &colours, &voxel_of);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Point3& p = points[i];
+      if (!p.allFinite() || std::abs(p.y()) > 1e6) {
+        EXPECT_EQ(voxel_of[i], VoxelMap::kNoVoxel) << "point " << i;
+        continue;
+      }
+      const VoxelIndex index = map.indexOf(p);
+      const auto [it, is_new] = id_of.emplace(std::array<int, 3>{index.x(), index.y(), index.z()},
+                                              static_cast<std::uint32_t>(expected.size()));
+      if (is_new) {
+        expected.emplace_back();
+        expected.back().index = index;
+      }
+      ASSERT_EQ(voxel_of[i], it->second) << "point " << i << " of frame " << frame;
+      Voxel& v = expected[it->second];
+      v.hits += 1;
+      v.height += static_cast<float>((p.z() - v.height) / v.hits);
+      v.frame = frame;
+      if (colours[i][3]) v.r = colours[i][0], v.g = colours[i][1], v.b = colours[i][2], v.coloured = true;
+    }
+    EXPECT_EQ(created, expected.size() - before);
+  }
+  ASSERT_EQ(map.size(), expected.size());
+  EXPECT_GT(map.size(), 100000u);  // the table grew past its first 65536 slots several times
+  for (std::size_t id = 0; id < expected.size(); ++id) {
+    const Voxel& a = map.voxels()[id];
+    const Voxel& b = expected[id];
+    ASSERT_EQ(a.index, b.index) << "voxel " << id;
+    EXPECT_EQ(a.hits, b.hits) << "voxel " << id;
+    EXPECT_EQ(a.height, b.height) << "voxel " << id;
+    EXPECT_EQ(a.frame, b.frame) << "voxel " << id;
+    const std::array<int, 4> colour_a{a.r, a.g, a.b, a.coloured}, colour_b{b.r, b.g, b.b, b.coloured};
+    EXPECT_EQ(colour_a, colour_b) << "voxel " << id;
+    EXPECT_EQ(map.find(b.index), static_cast<std::int64_t>(id));
+  }
 }
 
 // The map keeps the extent of its voxels' indices as it grows, and a restored map has the extent of
