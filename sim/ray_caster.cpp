@@ -3,6 +3,7 @@
 #include "sim/hfield_ray.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 
@@ -17,6 +18,32 @@ bool eliminated(const mjModel* m, int g, int bodyexclude) {
   if (mat < 0 && m->geom_rgba[4 * g + 3] == 0) return true;
   if (mat >= 0 && m->mat_rgba[4 * mat + 3] == 0) return true;
   return false;
+}
+
+// Half the edges of an axis-aligned box about geom g's centre that encloses it: its own box
+// rotated into the world for the primitive shapes (a cylinder's box holds it, a capsule's adds its
+// caps), the bounding sphere's for meshes and anything else. A building's sphere box is far looser
+// than its walls: every ray near the building would be tested against it.
+Eigen::Vector3d halfExtent(const mjModel* m, const mjData* d, int g) {
+  const mjtNum* size = m->geom_size + 3 * g;
+  Eigen::Vector3d local;
+  switch (m->geom_type[g]) {
+    case mjGEOM_BOX:
+    case mjGEOM_ELLIPSOID: local = Eigen::Vector3d(size[0], size[1], size[2]); break;
+    case mjGEOM_SPHERE: local = Eigen::Vector3d::Constant(size[0]); break;
+    case mjGEOM_CYLINDER: local = Eigen::Vector3d(size[0], size[0], size[1]); break;
+    case mjGEOM_CAPSULE: local = Eigen::Vector3d(size[0], size[0], size[1] + size[0]); break;
+    default: return Eigen::Vector3d::Constant(m->geom_rbound[g]);
+  }
+  // geom_xmat is row-major world_from_geom: the box's extent along world axis i is
+  // sum_j |R_ij| local_j
+  Eigen::Vector3d half;
+  for (int i = 0; i < 3; ++i) {
+    half[i] = 0;
+    for (int j = 0; j < 3; ++j) half[i] += std::abs(d->geom_xmat[9 * g + 3 * i + j]) * local[j];
+  }
+  // never looser than the sphere
+  return half.cwiseMin(Eigen::Vector3d::Constant(m->geom_rbound[g]));
 }
 
 // entry distance of the ray into a box, or +inf if it misses it within [0, tmax]
@@ -45,12 +72,11 @@ RayCaster::RayCaster(const mjModel* m, const mjData* d, int bodyexclude)
       unbounded_.push_back(g);
       continue;
     }
-    // the bounding sphere encloses the geom whatever its shape and orientation
     const Eigen::Vector3d c(d->geom_xpos[3 * g], d->geom_xpos[3 * g + 1], d->geom_xpos[3 * g + 2]);
-    const double r = m->geom_rbound[g] * (1 + 1e-9) + 1e-9;
+    const Eigen::Vector3d half = halfExtent(m, d, g) * (1 + 1e-9) + Eigen::Vector3d::Constant(1e-9);
     order_.push_back(g);
-    box_lo_.push_back(c.array() - r);
-    box_hi_.push_back(c.array() + r);
+    box_lo_.push_back(c - half);
+    box_hi_.push_back(c + half);
   }
   if (!order_.empty()) {
     nodes_.reserve(2 * order_.size());
