@@ -7,8 +7,10 @@
 #include <pcl/segmentation/progressive_morphological_filter.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 namespace terrain::eval {
 
@@ -61,8 +63,8 @@ std::vector<std::uint8_t> groundByRansacPlane(const std::vector<Point3>& points,
   return out;
 }
 
-std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>& points,
-                                                      const MorphologicalFilterConfig& c) {
+std::vector<std::uint8_t> groundByMorphologicalFilterPcl(const std::vector<Point3>& points,
+                                                         const MorphologicalFilterConfig& c) {
   std::vector<std::uint8_t> out(points.size(), 0);
   if (points.empty()) return out;
   pcl::ProgressiveMorphologicalFilter<pcl::PointXYZ> pmf;
@@ -75,6 +77,129 @@ std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>&
   std::vector<int> ground;
   pmf.extract(ground);
   for (int i : ground) out[i] = 1;
+  return out;
+}
+
+namespace {
+
+// Over a row of n values read with a stride, the minimum (or, with `larger`, the maximum) of the
+// values lo[i] .. hi[i] for every i, where lo and hi never decrease: a monotone queue.
+void slidingExtreme(const float* in, std::size_t stride, int n, const int* lo, const int* hi, float* out,
+                    std::size_t out_stride, bool larger, std::vector<int>& queue) {
+  queue.resize(static_cast<std::size_t>(n));
+  int head = 0, tail = 0, next = 0;
+  const auto better = [larger](float a, float b) { return larger ? a >= b : a <= b; };
+  for (int i = 0; i < n; ++i) {
+    for (; next <= hi[i]; ++next) {
+      const float v = in[static_cast<std::size_t>(next) * stride];
+      while (tail > head && better(v, in[static_cast<std::size_t>(queue[tail - 1]) * stride])) --tail;
+      queue[tail++] = next;
+    }
+    while (queue[head] < lo[i]) ++head;
+    out[static_cast<std::size_t>(i) * out_stride] = in[static_cast<std::size_t>(queue[head]) * stride];
+  }
+}
+
+// The morphological opening of PCL's applyMorphologicalOperator (MORPH_OPEN) at window
+// `resolution`: each point's height becomes the largest, over the points within half the window
+// along x and along y (float bounds, inclusive, as PCL's octree box search tests them), of their
+// smallest such height. Points that share an (x, y) share the result, so it is computed on the grid
+// of the points' distinct x and y coordinates, one sliding window per row and per column. False,
+// with nothing computed, if that grid would exceed `max_cells` (points scattered in x and y, as a
+// raw scan's are).
+bool openOnGrid(const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& z,
+                float resolution, std::size_t max_cells, std::vector<float>& opened) {
+  std::vector<float> xs(x), ys(y);
+  std::sort(xs.begin(), xs.end());
+  xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
+  std::sort(ys.begin(), ys.end());
+  ys.erase(std::unique(ys.begin(), ys.end()), ys.end());
+  const std::size_t nx = xs.size(), ny = ys.size();
+  if (nx * ny > max_cells) return false;
+  const float half = resolution / 2.0f;
+  // each coordinate's window: the first and last coordinate c with c >= v - half and c <= v + half
+  const auto windows = [half](const std::vector<float>& v, std::vector<int>& lo, std::vector<int>& hi) {
+    lo.resize(v.size()), hi.resize(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const float a = v[i] - half, b = v[i] + half;
+      lo[i] = static_cast<int>(std::lower_bound(v.begin(), v.end(), a) - v.begin());
+      hi[i] = static_cast<int>(std::upper_bound(v.begin(), v.end(), b) - v.begin()) - 1;
+    }
+  };
+  std::vector<int> xlo, xhi, ylo, yhi;
+  windows(xs, xlo, xhi);
+  windows(ys, ylo, yhi);
+  // the grid, row ix holding the ny cells of x = xs[ix]
+  std::vector<std::size_t> cell(x.size());
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::vector<float> grid(nx * ny, kInf), pass(nx * ny);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const std::size_t ix = static_cast<std::size_t>(std::lower_bound(xs.begin(), xs.end(), x[i]) - xs.begin());
+    const std::size_t iy = static_cast<std::size_t>(std::lower_bound(ys.begin(), ys.end(), y[i]) - ys.begin());
+    cell[i] = ix * ny + iy;
+    grid[cell[i]] = std::min(grid[cell[i]], z[i]);
+  }
+  std::vector<int> queue;
+  const auto box = [&](bool larger) {
+    const int sx = static_cast<int>(nx), sy = static_cast<int>(ny);
+    for (std::size_t ix = 0; ix < nx; ++ix)
+      slidingExtreme(&grid[ix * ny], 1, sy, ylo.data(), yhi.data(), &pass[ix * ny], 1, larger, queue);
+    for (std::size_t iy = 0; iy < ny; ++iy)
+      slidingExtreme(&pass[iy], ny, sx, xlo.data(), xhi.data(), &grid[iy], ny, larger, queue);
+  };
+  // erosion: empty cells hold +inf and never win a minimum
+  box(false);
+  // dilation of the eroded heights of the occupied cells only: the others hold -inf
+  std::vector<std::uint8_t> occupied(nx * ny, 0);
+  for (std::size_t c : cell) occupied[c] = 1;
+  for (std::size_t c = 0; c < grid.size(); ++c) {
+    if (!occupied[c]) grid[c] = -kInf;
+  }
+  box(true);
+  opened.resize(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) opened[i] = grid[cell[i]];
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>& points,
+                                                      const MorphologicalFilterConfig& c) {
+  std::vector<std::uint8_t> out(points.size(), 0);
+  if (points.empty()) return out;
+  for (const Point3& p : points) {
+    if (!p.cast<float>().allFinite()) return groundByMorphologicalFilterPcl(points, c);
+  }
+  // PCL's series of windows and height thresholds (exponential windows of base 2), in its float
+  // arithmetic
+  std::vector<float> windows, thresholds;
+  for (int iteration = 0; windows.empty() || windows.back() < c.max_window_size; ++iteration) {
+    // (std::pow of a float and an int is taken in double, as in PCL)
+    const float window = static_cast<float>(c.cell_size * (2.0f * std::pow(2.0f, iteration) + 1.0f));
+    float threshold = iteration == 0 ? c.initial_distance
+                                     : c.slope * (window - windows.back()) * c.cell_size + c.initial_distance;
+    threshold = std::min(threshold, c.max_distance);
+    windows.push_back(window), thresholds.push_back(threshold);
+  }
+  // the points still taken for ground, in input order, and their coordinates as PCL holds them
+  std::vector<std::size_t> ground(points.size());
+  std::iota(ground.begin(), ground.end(), std::size_t{0});
+  std::vector<float> x, y, z, opened;
+  for (std::size_t i = 0; i < windows.size(); ++i) {
+    x.resize(ground.size()), y.resize(ground.size()), z.resize(ground.size());
+    for (std::size_t k = 0; k < ground.size(); ++k) {
+      const Point3& p = points[ground[k]];
+      x[k] = static_cast<float>(p.x()), y[k] = static_cast<float>(p.y()), z[k] = static_cast<float>(p.z());
+    }
+    if (!openOnGrid(x, y, z, windows[i], std::max<std::size_t>(std::size_t{1} << 22, 16 * points.size()), opened))
+      return groundByMorphologicalFilterPcl(points, c);
+    std::vector<std::size_t> kept;
+    for (std::size_t k = 0; k < ground.size(); ++k) {
+      if (z[k] - opened[k] < thresholds[i]) kept.push_back(ground[k]);
+    }
+    ground.swap(kept);
+  }
+  for (std::size_t i : ground) out[i] = 1;
   return out;
 }
 

@@ -26,14 +26,22 @@ std::vector<std::uint8_t> groundByFixedBand(const std::vector<Point3>& points,
 std::vector<std::uint8_t> groundByRansacPlane(const std::vector<Point3>& points, double distance_threshold);
 
 struct MorphologicalFilterConfig {
-  int max_window_size = 8;        // [cells]: windows 1, 3, 7 (walls in a voxel map are thin shells)
+  int max_window_size = 8;        // [cells]: windows 3, 5, 9 (PCL's series 2 * 2^k + 1 up to the first >= 8;
+                                  // small, as walls in a voxel map are thin shells)
   float slope = 0.7f;             // terrain slope [m/m]
   float initial_distance = 0.3f;  // [m]
   float max_distance = 2.5f;      // [m]
   float cell_size = 1.0f;         // [m] (PCL's default)
 };
+// PCL's ProgressiveMorphologicalFilter, with PCL's default exponential windows (base 2). Points
+// that lie on a grid of shared x and y coordinates (the columns of a voxel map) are filtered on that
+// grid with the same result, far faster: PCL searches its octree once per point and window; other
+// point sets (a raw scan) go to PCL itself.
 std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>& points,
                                                       const MorphologicalFilterConfig& config);
+// The same, always by PCL (the reference the grid is tested against).
+std::vector<std::uint8_t> groundByMorphologicalFilterPcl(const std::vector<Point3>& points,
+                                                         const MorphologicalFilterConfig& config);
 
 // Fills the NaN cells of a height map (CV_32FC1) that lie within `radius` cells of data.
 cv::Mat inpaintHeights(const cv::Mat& heights, int radius);
