@@ -149,6 +149,7 @@ void BM_VoxelInsert(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(sweep.size()));
   state.counters["voxels"] = static_cast<double>(optimised ? map.size() : hashed.size());
+  state.counters["points"] = static_cast<double>(sweep.size());
 }
 BENCHMARK(BM_VoxelInsert)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);
 
@@ -459,7 +460,7 @@ int main(int argc, char** argv) {
   }
   if (const auto* r = get("BM_VoxelInsert/1/")) {
     const auto* base = get("BM_VoxelInsert/0/");
-    std::printf("%-44s %11.2f ms %16s %11.1fx\n", ("voxel insertion, one sweep of " + std::to_string(static_cast<long>(perSecond(*r) * ms(*r) / 1e3 + 0.5)) + " points").c_str(),
+    std::printf("%-44s %11.2f ms %16s %11.1fx\n", ("voxel insertion, one sweep of " + std::to_string(static_cast<long>(r->counters.at("points"))) + " points").c_str(),
                 ms(*r), "", base ? ms(*base) / ms(*r) : 0.0);
     if (base) std::printf("%-44s %11.2f ms %16s %12s\n", "voxel insertion, std::unordered_map (baseline)", ms(*base), "", "1.0x");
   }
