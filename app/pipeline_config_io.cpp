@@ -80,6 +80,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"estimation.parallax_min_gap", num(c.estimation.parallax_min_gap)},
       {"estimation.parallax_max_gap", num(c.estimation.parallax_max_gap)},
       {"estimation.parallax_min_t", num(c.estimation.parallax_min_t)},
+      {"estimation.hold_young_crowns", [&c](const YAML::Node& n) { c.estimation.hold_young_crowns = n.as<bool>(); }},
       {"footprint.enabled", [&c](const YAML::Node& n) { c.footprint.enabled = n.as<bool>(); }},
       {"footprint.min_side", num(c.footprint.min_side)},
       {"footprint.wall_tolerance", num(c.footprint.wall_tolerance)},
@@ -227,7 +228,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                      {"spread_distance", c.estimation.spread_distance},
                      {"parallax_slope", c.estimation.parallax_slope}, {"parallax_change", c.estimation.parallax_change},
                      {"parallax_min_gap", c.estimation.parallax_min_gap}, {"parallax_max_gap", c.estimation.parallax_max_gap},
-                     {"parallax_min_t", c.estimation.parallax_min_t}};
+                     {"parallax_min_t", c.estimation.parallax_min_t},
+                     {"hold_young_crowns", c.estimation.hold_young_crowns}};
   j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
                     {"wall_tolerance", c.footprint.wall_tolerance}, {"wall_band", c.footprint.wall_band},
                     {"min_wall_share", c.footprint.min_wall_share},

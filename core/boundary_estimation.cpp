@@ -195,6 +195,19 @@ int holdBackYoungVertices(TerrainMesh& mesh, const VoxelMap& map, const Boundary
     }
     if (held > stand) hold.push_back(i);
   }
+  if (cfg.hold_young_crowns) {
+    const MeshObjects objects = findMeshObjects(mesh, map);
+    const FoliageObjects foliage = foliageObjects(objects, mesh, map, cfg.foliage_margin);
+    for (std::uint32_t i : objects.members) {
+      const MeshVertex& m = vertices[i];
+      if (foliage.leafy[static_cast<std::size_t>(objects.of[i])] && m.estimated() &&
+          m.estimates.size() < kParallaxEstimates)
+        hold.push_back(i);
+    }
+  }
+  // (a vertex in both lists is counted once)
+  std::sort(hold.begin(), hold.end());
+  hold.erase(std::unique(hold.begin(), hold.end()), hold.end());
   for (std::uint32_t i : hold) vertices[i].parallax = true;
   return static_cast<int>(hold.size());
 }

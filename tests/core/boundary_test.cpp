@@ -568,6 +568,54 @@ TEST(BoundaryEstimationTest, AYoungVertexFollowsItsNeighboursParallax) {
   EXPECT_EQ(holdBackYoungVertices(mesh, map, BoundaryEstimationConfig{}), 1);
 }
 
+// Two objects of 3 x 3 vertices, one with a foliage-green top and one grey, each with a vertex of
+// `young` estimates amid vertices of 6 that stand: the crown's young vertex is held back until it
+// has the 5 estimates the parallax test needs; the grey one stands; neither with hold_young_crowns
+// off or the parallax test off.
+TEST(BoundaryEstimationTest, AYoungCrownVertexWaitsForTheParallaxTest) {
+  struct Case {
+    std::size_t young;
+    bool hold, parallax_on, crown_held;
+  };
+  for (const Case c : {Case{1, true, true, true}, Case{4, true, true, true}, Case{5, true, true, false},
+                       Case{2, false, true, false}, Case{2, true, false, false}}) {
+    std::vector<Voxel> voxels;
+    std::vector<MeshVertex> vertices;
+    for (const int x0 : {0, 10}) {
+      const bool leafy = x0 == 0;
+      for (int y = -1; y <= 1; ++y) {
+        for (int x = -1; x <= 1; ++x) {
+          test::addColumn(voxels, vertices, CellIndex(x0 + x, y), 40, 8.0f, VoxelLabel::NonGround);
+          Voxel& top = voxels.back();
+          top.coloured = true;
+          top.r = leafy ? 40 : 120, top.g = leafy ? 110 : 120, top.b = leafy ? 35 : 120;
+          MeshVertex& m = vertices.back();
+          m.estimates.assign(x == 0 && y == 0 ? c.young : 6, HeightEstimate{12.0f, 20.0f, 1.6f});
+          m.recovered_height = 12.0f;
+        }
+      }
+    }
+    VoxelMap map(VoxelMapConfig{0.2});
+    ASSERT_TRUE(map.restore(voxels));
+    TerrainMesh mesh;
+    ASSERT_TRUE(mesh.restore(vertices));
+    BoundaryEstimationConfig cfg;
+    cfg.hold_young_crowns = c.hold;
+    if (!c.parallax_on) cfg.parallax_slope = 0;
+    const std::string what = "young " + std::to_string(c.young) + ", hold " + std::to_string(c.hold) +
+                             ", parallax test " + std::to_string(c.parallax_on);
+    EXPECT_EQ(holdBackYoungVertices(mesh, map, cfg), c.crown_held ? 1 : 0) << what;
+    const auto& v = mesh.vertices();
+    EXPECT_EQ(v[mesh.find(CellIndex(0, 0))].estimated(), !c.crown_held) << what;
+    EXPECT_TRUE(v[mesh.find(CellIndex(10, 0))].estimated()) << what;
+    for (const auto& m : v) {
+      if (m.cell != CellIndex(0, 0)) {
+        EXPECT_TRUE(m.estimated()) << what;
+      }
+    }
+  }
+}
+
 // A wall at (3, 20), 12 m high, seen by a camera driving north from y = -10 to -1; in one drive its
 // own top is the topmost boundary, in the other an unsensed building 20 m behind it, 30 m high. The
 // first raises the wall to 12 m; the second is caught by its parallax and leaves the wall as sensed.
