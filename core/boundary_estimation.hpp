@@ -115,16 +115,17 @@ struct BoundaryEstimationConfig {
   double parallax_max_gap = 100.0;  // [m]
   double parallax_min_t = 8.0;      // [standard errors of the slope]
   // At the end of a run (holdBackYoungVertices, with the parallax test on), a vertex of an object
-  // that shows foliage (as for foliage_tops) is also held back while it has fewer estimates than the
-  // parallax test needs: crowns stand before and behind other crowns and buildings, and the topmost
-  // edge above a crown's vertex is often one of theirs, which only the test can tell. On 60 frames
-  // of 12 scenes (urban seeds 1-5, forest 1-2, mixed 1-2, flat, slope, rough) the trees too high went
-  // from 23 to 16 (forest 1 11 -> 5: an 8.2 m tree had been raised to 28.1 m), those at
+  // that shows foliage (as for foliage_tops) is also held back while it has fewer estimates than
+  // the parallax test needs: crowns stand before and behind other crowns and buildings, and the
+  // topmost edge above a crown's vertex is often one of theirs, which only the test can tell. On 60
+  // frames of 12 scenes (urban seeds 1-5, forest 1-2, mixed 1-2, flat, slope, rough) the trees too
+  // high went from 23 to 16 (forest 1 11 -> 5: an 8.2 m tree had been raised to 28.1 m), those at
   // their real height stayed 133 of 332 (forest 1 19 -> 21, mixed 1 8 -> 7, urban 3 12 -> 11) and
   // the buildings 50 of 69 (7 too high); terrain cells raised by mistake 932 -> 703; the error over
   // estimated cells forest 1 5.50 -> 4.56 m, forest 2 6.04 -> 4.71 m, urban 2 0.71 -> 0.61 m, rough
-  // 0.66 -> 2.89 m (part of a 21.8 m tree's crown held back: its top 21.6 -> 19.9 m); boundary coverage forest 1 0.407 ->
-  // 0.383, urban 5 0.601 -> 0.583, urban 1 0.682 -> 0.694, the rest within 0.015.
+  // 0.66 -> 2.89 m (part of a 21.8 m tree's crown held back: its top 21.6 -> 19.9 m); boundary
+  // coverage forest 1 0.407 -> 0.383, urban 5 0.601 -> 0.583, urban 1 0.682 -> 0.694, the rest
+  // within 0.015.
   bool hold_young_crowns = true;
 };
 
