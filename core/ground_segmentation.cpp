@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -1020,6 +1021,7 @@ struct IncrementalGroundSegmentation::State {
   std::unordered_map<std::uint64_t, Tile> tiles;
   std::unordered_set<std::uint64_t> touched;
   std::size_t taken = 0;  // voxels already placed in tiles
+  std::vector<std::uint64_t> fresh;  // the tile of each voxel added since the last update (while taking them in)
   SegmentationResult result;
   Stats stats;
   Workspace work;  // the last update's layout and subproblem, kept so that their memory is reused
@@ -1031,16 +1033,16 @@ struct IncrementalGroundSegmentation::State {
     base = floorDiv(-(1 << 20), k) * k;
   }
 
-  // appends to out, in key order, the tiles of the map within tile_radius of any of these that are
-  // not yet in seen (and adds them to it)
-  void windows(const std::vector<std::uint64_t>& of, std::unordered_set<std::uint64_t>& seen,
+  // appends to out, in key order, the tiles of the map within `radius` tiles of any of these that
+  // are not yet in seen (and adds them to it)
+  void windows(const std::vector<std::uint64_t>& of, int radius, std::unordered_set<std::uint64_t>& seen,
                std::vector<std::uint64_t>& out) const {
     const std::size_t first = out.size();
     for (std::uint64_t key : of) {
       const int tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
       const int ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
-      for (int dy = -cfg.tile_radius; dy <= cfg.tile_radius; ++dy) {
-        for (int dx = -cfg.tile_radius; dx <= cfg.tile_radius; ++dx) {
+      for (int dy = -radius; dy <= radius; ++dy) {
+        for (int dx = -radius; dx <= radius; ++dx) {
           const std::uint64_t u = tileKey(tx + dx, ty + dy);
           if (tiles.count(u) && seen.insert(u).second) out.push_back(u);
         }
@@ -1098,28 +1100,40 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   st.setCell(map.voxelSize());
   auto& voxels = map.voxels();
   const std::size_t n = voxels.size();
-  // take in the new voxels, run by run of successive voxels in one tile (most runs are long). A
-  // tile is due once its new voxels make up defer_share of its voxels: a share that only grows as
-  // voxels are added, so whether a run made it due is known at the run's end.
+  tbb::task_arena arena = arenaFor(cfg.threads);
+  // take in the new voxels, run by run of successive voxels in one tile (most runs are long), their
+  // tiles found in parallel first. A tile is due once its new voxels make up defer_share of its
+  // voxels: a share that only grows as voxels are added, so whether a run made it due is known at
+  // the run's end.
   const OffsetDivider divide(st.base, st.k);
   const int first_tile = st.base / st.k;
-  const auto tileOf = [&](std::size_t id) {
-    return std::pair<int, int>(first_tile + divide(voxels[id].index.x()), first_tile + divide(voxels[id].index.y()));
-  };
-  for (std::size_t id = st.taken; id < n;) {
-    const auto [tx, ty] = tileOf(id);
-    std::size_t end = id + 1;
-    while (end < n && tileOf(end) == std::pair<int, int>(tx, ty)) ++end;
-    const std::uint64_t key = tileKey(tx, ty);
+  std::vector<std::uint64_t>& fresh = st.fresh;
+  fresh.resize(n - std::min(n, st.taken));
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, fresh.size(), [&](std::size_t i) {
+      const VoxelIndex& index = voxels[st.taken + i].index;
+      fresh[i] = tileKey(first_tile + divide(index.x()), first_tile + divide(index.y()));
+    });
+  });
+  for (std::size_t i = 0; i < fresh.size();) {
+    const std::uint64_t key = fresh[i];
+    std::size_t end = i + 1;
+    while (end < fresh.size() && fresh[end] == key) ++end;
     State::Tile& t = st.tiles[key];
-    if (t.ids.empty()) t.tx = tx, t.ty = ty;
+    if (t.ids.empty()) {
+      t.tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
+      t.ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
+    }
     const auto due = [&] {
       return t.pending > 0 && static_cast<double>(t.pending) >= cfg.defer_share * static_cast<double>(t.ids.size());
     };
     const bool was_due = due();
-    t.pending += end - id;
-    for (; id < end; ++id) t.ids.push_back(static_cast<std::uint32_t>(id));
+    t.pending += end - i;
+    const std::size_t had = t.ids.size();
+    t.ids.resize(had + (end - i));
+    std::iota(t.ids.begin() + static_cast<std::ptrdiff_t>(had), t.ids.end(), static_cast<std::uint32_t>(st.taken + i));
     if (!was_due && due()) st.touched.insert(key);
+    i = end;
   }
   st.taken = n;
   SegmentationResult& out = st.result;
@@ -1130,7 +1144,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   // the tiles whose window reaches a touched tile, in a fixed order
   std::vector<std::uint64_t> keys;
   std::unordered_set<std::uint64_t> seen;
-  st.windows(std::vector<std::uint64_t>(st.touched.begin(), st.touched.end()), seen, keys);
+  st.windows(std::vector<std::uint64_t>(st.touched.begin(), st.touched.end()), cfg.tile_radius, seen, keys);
   for (std::uint64_t key : st.touched) {
     auto it = st.tiles.find(key);
     if (it != st.tiles.end()) it->second.pending = 0;
@@ -1138,9 +1152,10 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   st.touched.clear();
   st.stats.refitted_tiles = keys.size();
   if (keys.empty()) return;
-  // the tiles to refit, then the other tiles of their windows: their voxels enter the planes
+  // the tiles to refit, then the other tiles of their windows (their voxels enter the planes) and
+  // those next to them (their voxels' labels enter the pair terms)
   std::vector<std::uint64_t> context;
-  st.windows(keys, seen, context);
+  st.windows(keys, std::max(1, cfg.tile_radius), seen, context);
   std::vector<TileLayout::Tile> tiles;
   std::vector<const std::vector<std::uint32_t>*> tile_ids;
   for (const auto* list : {&keys, &context}) {
@@ -1151,29 +1166,34 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
   }
   const std::size_t count = keys.size();
   const int k = st.k;
-  tbb::task_arena arena = arenaFor(cfg.threads);
   arena.execute([&] {
     Workspace& ws = st.work;
     ws.layout.build(voxels, k, tiles, tile_ids);
     const TileLayout& layout = ws.layout;
     tilePlanes(ws, count, cfg, st.cell);
     // the subproblem: every voxel of the refitted tiles, the first positions of the layout.
-    // Neighbours in tiles outside it keep their labels: their pair terms become unary terms.
+    // Neighbours in tiles outside it keep their labels: their pair terms become unary terms. Every
+    // tile of the map next to a refitted one is in the layout, so such a neighbour is looked up in
+    // its column there; a tile missing from the layout holds no voxel.
     GmrfProblem& p = ws.problem;
     const auto fixed = [&](std::uint32_t q, std::size_t t, int lx, int ly, float h) {
       const TileLayout::Tile& tile = tiles[t];
-      for (const VoxelIndex& d4 :
-           {VoxelIndex(1, 0, 0), VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0), VoxelIndex(0, -1, 0)}) {
-        const int l = d4.x() != 0 ? lx + d4.x() : ly + d4.y();
-        if (l >= 0 && l < k) continue;
-        const std::int64_t u = layout.tileAt(tile.tx + d4.x(), tile.ty + d4.y());
-        if (u >= 0 && static_cast<std::size_t>(u) < count) continue;
-        const std::int64_t j = map.find(VoxelIndex(tile.tx * k + lx, tile.ty * k + ly, layout.z(q)) + d4);
-        if (j < 0) continue;
-        const float w = pairWeight(cfg, h, voxels[j].height);
-        const bool ground_j = out.refined[j] != 0;
-        p.unary_ground[q] += ground_j ? -w : w;
-        p.unary_nonground[q] += ground_j ? w : -w;
+      static constexpr int kSteps[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+      for (const auto& step : kSteps) {
+        const int nx = lx + step[0], ny = ly + step[1];
+        if (nx >= 0 && nx < k && ny >= 0 && ny < k) continue;
+        const std::int64_t u = layout.tileAt(tile.tx + step[0], tile.ty + step[1]);
+        if (u < 0 || static_cast<std::size_t>(u) < count) continue;
+        const std::size_t c = static_cast<std::size_t>(floorMod(ny, k)) * k + static_cast<std::size_t>(floorMod(nx, k));
+        const std::int32_t z = layout.z(q);
+        std::uint32_t r = layout.column(u, c);
+        const std::uint32_t e = layout.column(u, c + 1);
+        while (r < e && layout.z(r) < z) ++r;
+        if (r == e || layout.z(r) != z) continue;
+        const float w = pairWeight(cfg, h, layout.height(r));
+        const bool ground_r = out.refined[layout.id(r)] != 0;
+        p.unary_ground[q] += ground_r ? -w : w;
+        p.unary_nonground[q] += ground_r ? w : -w;
       }
     };
     setUnaries(ws, count, st.cell, cfg, out, fixed);
