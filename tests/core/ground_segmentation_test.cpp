@@ -464,6 +464,45 @@ TEST(IncrementalGroundSegmentationTest, DeferredTilesWaitForTheirShareOfNewVoxel
   }
 }
 
+// A voxel whose single-site terms cancel (0.3-0.5 m above its ground: not in G1, inside R) and
+// whose only neighbour lies in a tile that the update holds fixed takes that neighbour's label.
+// Tiles (6 m): x 0-6 m, ground at 0.1 m, and a voxel u at 0.21 m on its east edge; x 6-12 m, ground
+// at 0.01 m but for the column of a voxel v at 0.39 m next to u; x 12-18 m, ground added later.
+// Adding the third refits the second (in its window), not the first.
+TEST(IncrementalGroundSegmentationTest, ANeighbourHeldFixedAcrossTheRefittedTilesEdgeCounts) {
+  std::vector<Point3> first, later;
+  for (int i = 0; i < 60; ++i) {
+    for (int j = 0; j < 30; ++j) {
+      const Point3 p(0.1 + 0.2 * i, 0.1 + 0.2 * j, i < 30 ? 0.1 : 0.01);
+      if (i != 30 || j != 15) first.push_back(p);
+      if (i < 30) later.emplace_back(p.x() + 12.0, p.y(), 0.01);
+    }
+  }
+  first.emplace_back(5.9, 3.1, 0.21);  // u
+  first.emplace_back(6.1, 3.1, 0.39);  // v
+  VoxelMap map(VoxelMapConfig{0.2});
+  GroundSegmentationConfig cfg;
+  IncrementalGroundSegmentation inc(cfg);
+  map.insert(first, 0);
+  inc.update(map);
+  const std::int64_t u = map.find(VoxelIndex(29, 15, 1)), v = map.find(VoxelIndex(30, 15, 1));
+  ASSERT_GE(u, 0);
+  ASSERT_GE(v, 0);
+  map.insert(later, 1);
+  inc.update(map);
+  EXPECT_EQ(inc.lastStats().refitted_tiles, 2u);
+  const SegmentationResult& r = inc.result();
+  // u is ground on its own terms; v's terms cancel, and its rough class is non-ground
+  EXPECT_TRUE(r.rough[u] && r.refined[u]);
+  const double above = map.voxels()[v].height - r.ground_height[v];
+  ASSERT_GT(above, cfg.delta);
+  ASSERT_LE(above, cfg.range_margin);
+  ASSERT_FALSE(r.rough[v]);
+  // so its pair with u decides
+  EXPECT_TRUE(r.refined[v]);
+  EXPECT_EQ(map.voxels()[v].label, VoxelLabel::Ground);
+}
+
 // Two patches of flat ground 150 km apart (a GPS jump, say): the map's extent holds 6e8 tiles of
 // which two are occupied; both whole-map and incremental segmentation label them without a grid
 // over the whole extent.
