@@ -1020,7 +1020,7 @@ struct IncrementalGroundSegmentation::State {
   };
   std::unordered_map<std::uint64_t, Tile> tiles;
   std::unordered_set<std::uint64_t> touched;
-  std::size_t taken = 0;  // voxels already placed in tiles
+  std::size_t taken = 0;             // voxels already placed in tiles
   std::vector<std::uint64_t> fresh;  // the tile of each voxel added since the last update (while taking them in)
   SegmentationResult result;
   Stats stats;

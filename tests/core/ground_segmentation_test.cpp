@@ -296,9 +296,10 @@ std::vector<std::vector<Point3>> strips() {
   return out;
 }
 
-TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentation) {
+// Segments strips() incrementally with cfg and compares the result with the whole-map segmentation.
+void expectIncrementalMatchesWhole(const GroundSegmentationConfig& cfg) {
+  SCOPED_TRACE("tile_radius " + std::to_string(cfg.tile_radius));
   VoxelMap map(VoxelMapConfig{0.2});
-  GroundSegmentationConfig cfg;
   IncrementalGroundSegmentation inc(cfg);
   std::size_t refitted_last = 0;
   for (const auto& strip : strips()) {
@@ -328,6 +329,21 @@ TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentation) {
   // and the labels are in the map
   for (std::size_t i = 0; i < map.size(); i += 97) {
     EXPECT_EQ(map.voxels()[i].label, part.refined[i] ? VoxelLabel::Ground : VoxelLabel::NonGround);
+  }
+}
+
+TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentation) {
+  expectIncrementalMatchesWhole(GroundSegmentationConfig{});
+}
+
+// Windows of one tile (no neighbours in a tile's plane and histogram) and of five by five tiles:
+// the update re-segments the tiles whose window reaches a new voxel and lays out the tiles around
+// them, whose labels it holds fixed.
+TEST(IncrementalGroundSegmentationTest, MatchesTheWholeMapSegmentationWithOtherWindows) {
+  for (const int radius : {0, 2}) {
+    GroundSegmentationConfig cfg;
+    cfg.tile_radius = radius;
+    expectIncrementalMatchesWhole(cfg);
   }
 }
 
@@ -467,8 +483,9 @@ TEST(IncrementalGroundSegmentationTest, DeferredTilesWaitForTheirShareOfNewVoxel
 // A voxel whose single-site terms cancel (0.3-0.5 m above its ground: not in G1, inside R) and
 // whose only neighbour lies in a tile that the update holds fixed takes that neighbour's label.
 // Tiles (6 m): x 0-6 m, ground at 0.1 m, and a voxel u at 0.21 m on its east edge; x 6-12 m, ground
-// at 0.01 m but for the column of a voxel v at 0.39 m next to u; x 12-18 m, ground added later.
-// Adding the third refits the second (in its window), not the first.
+// at 0.01 m but for the column of a voxel v at 0.39 m next to u. With the default window (one tile
+// each way) adding ground at x 12-18 m re-segments the second tile, not the first; with a window of
+// one tile, touching the second tile does.
 TEST(IncrementalGroundSegmentationTest, ANeighbourHeldFixedAcrossTheRefittedTilesEdgeCounts) {
   std::vector<Point3> first, later;
   for (int i = 0; i < 60; ++i) {
@@ -480,27 +497,35 @@ TEST(IncrementalGroundSegmentationTest, ANeighbourHeldFixedAcrossTheRefittedTile
   }
   first.emplace_back(5.9, 3.1, 0.21);  // u
   first.emplace_back(6.1, 3.1, 0.39);  // v
-  VoxelMap map(VoxelMapConfig{0.2});
-  GroundSegmentationConfig cfg;
-  IncrementalGroundSegmentation inc(cfg);
-  map.insert(first, 0);
-  inc.update(map);
-  const std::int64_t u = map.find(VoxelIndex(29, 15, 1)), v = map.find(VoxelIndex(30, 15, 1));
-  ASSERT_GE(u, 0);
-  ASSERT_GE(v, 0);
-  map.insert(later, 1);
-  inc.update(map);
-  EXPECT_EQ(inc.lastStats().refitted_tiles, 2u);
-  const SegmentationResult& r = inc.result();
-  // u is ground on its own terms; v's terms cancel, and its rough class is non-ground
-  EXPECT_TRUE(r.rough[u] && r.refined[u]);
-  const double above = map.voxels()[v].height - r.ground_height[v];
-  ASSERT_GT(above, cfg.delta);
-  ASSERT_LE(above, cfg.range_margin);
-  ASSERT_FALSE(r.rough[v]);
-  // so its pair with u decides
-  EXPECT_TRUE(r.refined[v]);
-  EXPECT_EQ(map.voxels()[v].label, VoxelLabel::Ground);
+  for (const int radius : {1, 0}) {
+    SCOPED_TRACE("tile_radius " + std::to_string(radius));
+    VoxelMap map(VoxelMapConfig{0.2});
+    GroundSegmentationConfig cfg;
+    cfg.tile_radius = radius;
+    IncrementalGroundSegmentation inc(cfg);
+    map.insert(first, 0);
+    inc.update(map);
+    const std::int64_t u = map.find(VoxelIndex(29, 15, 1)), v = map.find(VoxelIndex(30, 15, 1));
+    ASSERT_GE(u, 0);
+    ASSERT_GE(v, 0);
+    if (radius == 1) {
+      map.insert(later, 1);
+    } else {
+      inc.touch({first.back()}, map.voxelSize());
+    }
+    inc.update(map);
+    EXPECT_EQ(inc.lastStats().refitted_tiles, radius == 1 ? 2u : 1u);
+    const SegmentationResult& r = inc.result();
+    // u is ground on its own terms; v's terms cancel, and its rough class is non-ground
+    EXPECT_TRUE(r.rough[u] && r.refined[u]);
+    const double above = map.voxels()[v].height - r.ground_height[v];
+    ASSERT_GT(above, cfg.delta);
+    ASSERT_LE(above, cfg.range_margin);
+    ASSERT_FALSE(r.rough[v]);
+    // so its pair with u decides
+    EXPECT_TRUE(r.refined[v]);
+    EXPECT_EQ(map.voxels()[v].label, VoxelLabel::Ground);
+  }
 }
 
 // Two patches of flat ground 150 km apart (a GPS jump, say): the map's extent holds 6e8 tiles of
