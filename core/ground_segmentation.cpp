@@ -11,8 +11,10 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 namespace terrain {
 
@@ -1006,6 +1008,11 @@ std::uint64_t tileKey(int tx, int ty) {
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(tx)) << 32) | static_cast<std::uint32_t>(ty);
 }
 
+// the tile coordinates of a key made by tileKey
+std::pair<int, int> keyTile(std::uint64_t key) {
+  return {static_cast<int>(static_cast<std::uint32_t>(key >> 32)), static_cast<int>(static_cast<std::uint32_t>(key))};
+}
+
 }  // namespace
 
 struct IncrementalGroundSegmentation::State {
@@ -1039,8 +1046,7 @@ struct IncrementalGroundSegmentation::State {
                std::vector<std::uint64_t>& out) const {
     const std::size_t first = out.size();
     for (std::uint64_t key : of) {
-      const int tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
-      const int ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
+      const auto [tx, ty] = keyTile(key);
       for (int dy = -radius; dy <= radius; ++dy) {
         for (int dx = -radius; dx <= radius; ++dx) {
           const std::uint64_t u = tileKey(tx + dx, ty + dy);
@@ -1120,10 +1126,7 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
     std::size_t end = i + 1;
     while (end < fresh.size() && fresh[end] == key) ++end;
     State::Tile& t = st.tiles[key];
-    if (t.ids.empty()) {
-      t.tx = static_cast<int>(static_cast<std::uint32_t>(key >> 32));
-      t.ty = static_cast<int>(static_cast<std::uint32_t>(key & 0xffffffffu));
-    }
+    if (t.ids.empty()) std::tie(t.tx, t.ty) = keyTile(key);
     const auto due = [&] {
       return t.pending > 0 && static_cast<double>(t.pending) >= cfg.defer_share * static_cast<double>(t.ids.size());
     };
