@@ -583,11 +583,16 @@ class TileLayout {
     for (int ly = ly0; ly < k_; ly += s) f(ly, lx0, col + ly * k_ + lx0);
   }
 
-  // the height of the lowest voxel of column c (row-major) of tile t; +inf if it is empty
-  float columnLow(std::size_t t, std::size_t c) const {
-    float low = std::numeric_limits<float>::infinity();
-    for (auto q = column(t, c); q < column(t, c + 1); ++q) low = std::min(low, height_[q]);
-    return low;
+  // the height of the lowest voxel of each column of tile t, in row-major order (+inf where the
+  // column is empty), into low[0 .. k*k - 1]
+  void columnLows(std::size_t t, float* low) const {
+    const std::uint32_t* col = columns_.data() + t * (k_ * k_ + 1);
+    std::uint32_t q = col[0];
+    for (int c = 0; c < k_ * k_; ++c) {
+      float l = std::numeric_limits<float>::infinity();
+      for (const std::uint32_t e = col[c + 1]; q < e; ++q) l = std::min(l, height_[q]);
+      low[c] = l;
+    }
   }
 
   // Links every voxel of tiles 0 .. count - 1 to its neighbours at +x, +y, +z in those tiles, with
@@ -855,8 +860,12 @@ void tilePlanes(Workspace& ws, std::size_t count, const GroundSegmentationConfig
   auto& candidates = ws.candidates;
   candidates.resize(tiles);
   tbb::parallel_for(std::size_t{0}, tiles, [&](std::size_t t) {
-    candidatesFromLows([&](std::size_t c) { return layout.columnLow(t, c); }, k, layout.tiles()[t].tx * k,
-                       layout.tiles()[t].ty * k, cell, candidates[t]);
+    // the lowest voxel of each column, in one pass along the tile's columns
+    thread_local std::vector<float> lows;
+    lows.resize(static_cast<std::size_t>(k) * k);
+    layout.columnLows(t, lows.data());
+    candidatesFromLows([&](std::size_t c) { return lows[c]; }, k, layout.tiles()[t].tx * k, layout.tiles()[t].ty * k,
+                       cell, candidates[t]);
   });
   ws.planes.resize(count);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
