@@ -252,32 +252,42 @@ IcmResult icm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_i
   std::vector<double> energy(kChunks), delta(kChunks);
   std::vector<std::vector<std::uint32_t>> moved(kChunks);
   std::vector<std::uint32_t> visit;  // the nodes of the colour due next (after the first sweep)
+  // the arrays, through pointers that each chunk copies into locals: the compiler then need not
+  // read them again after every store of a label (a byte, which may alias anything)
+  struct Arrays {
+    const float *unary_ground, *unary_nonground, *weight;
+    const std::uint32_t *next, *prev;
+    const std::uint8_t* parity;
+    std::uint8_t* ground;
+  };
+  const Arrays arrays{p.unary_ground.data(), p.unary_nonground.data(), p.weight.data(), p.next.data(),
+                      p.prev.data(),         p.parity.data(),          ground.data()};
   // Updates node v of the given colour, in place; with `first`, adds the energy of the labelling
   // the sweep started from to e: the single-site term of every node, before its update, and each
   // pair once, from its node of colour 0.
-  const auto update = [&](std::uint32_t v, std::uint8_t colour, bool first, double& e, double& d,
-                          std::vector<std::uint32_t>& changed) {
-    double cost_g = p.unary_ground[v], cost_n = p.unary_nonground[v];
+  const auto update = [](const Arrays& q, std::uint32_t v, std::uint8_t colour, bool first, double& e, double& d,
+                         std::vector<std::uint32_t>& changed) {
+    double cost_g = q.unary_ground[v], cost_n = q.unary_nonground[v];
     for (int a = 0; a < 3; ++a) {
-      const std::uint32_t u = p.next[3 * v + a];
+      const std::uint32_t u = q.next[3 * v + a];
       if (u != GmrfProblem::kNone) {
-        const double w = p.weight[3 * v + a];
-        cost_g += ground[u] ? -w : w;
-        cost_n += ground[u] ? w : -w;
+        const double w = q.weight[3 * v + a];
+        cost_g += q.ground[u] ? -w : w;
+        cost_n += q.ground[u] ? w : -w;
       }
-      const std::uint32_t b = p.prev[3 * v + a];
+      const std::uint32_t b = q.prev[3 * v + a];
       if (b != GmrfProblem::kNone) {
-        const double w = p.weight[3 * b + a];
-        cost_g += ground[b] ? -w : w;
-        cost_n += ground[b] ? w : -w;
+        const double w = q.weight[3 * b + a];
+        cost_g += q.ground[b] ? -w : w;
+        cost_n += q.ground[b] ? w : -w;
       }
     }
     if (first)
-      e += colour == 0 ? (ground[v] ? cost_g : cost_n) : (ground[v] ? p.unary_ground[v] : p.unary_nonground[v]);
-    const std::uint8_t best = cost_g < cost_n ? 1 : (cost_n < cost_g ? 0 : ground[v]);
-    if (best != ground[v]) {
+      e += colour == 0 ? (q.ground[v] ? cost_g : cost_n) : (q.ground[v] ? q.unary_ground[v] : q.unary_nonground[v]);
+    const std::uint8_t best = cost_g < cost_n ? 1 : (cost_n < cost_g ? 0 : q.ground[v]);
+    if (best != q.ground[v]) {
       d += best ? cost_g - cost_n : cost_n - cost_g;
-      ground[v] = best;
+      q.ground[v] = best;
       changed.push_back(v);
     }
   };
@@ -288,16 +298,19 @@ IcmResult icm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_i
       // nodes of one colour have no pair between them: update them all at once, in place
       arena.execute([&] {
         tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+          const Arrays q = arrays;
+          std::vector<std::uint32_t>& changed = moved[c];
           double e = 0, d = 0;
-          moved[c].clear();
+          changed.clear();
           if (sweep == 0) {
-            for (std::size_t v = n * c / kChunks; v < n * (c + 1) / kChunks; ++v) {
-              if ((p.parity[v] & 1) == colour) update(static_cast<std::uint32_t>(v), colour, true, e, d, moved[c]);
+            const std::size_t lo = n * c / kChunks, hi = n * (c + 1) / kChunks;
+            for (std::size_t v = lo; v < hi; ++v) {
+              if ((q.parity[v] & 1) == colour) update(q, static_cast<std::uint32_t>(v), colour, true, e, d, changed);
             }
           } else {
-            const std::size_t m = visit.size();
-            for (std::size_t i = m * c / kChunks; i < m * (c + 1) / kChunks; ++i)
-              update(visit[i], colour, false, e, d, moved[c]);
+            const std::size_t m = visit.size(), lo = m * c / kChunks, hi = m * (c + 1) / kChunks;
+            const std::uint32_t* const nodes = visit.data();
+            for (std::size_t i = lo; i < hi; ++i) update(q, nodes[i], colour, false, e, d, changed);
           }
           if (sweep == 0) energy[c] += e;
           delta[c] = d;
@@ -516,17 +529,16 @@ void candidatesFromLows(Low&& low, int k, int cx, int cy, double cell, Candidate
   out.x.resize(n), out.y.resize(n), out.z.resize(n);
 }
 
-// Eqs. 19-20 for node i of a problem, a voxel of height h [m] at grid index (x, y, z), from the
-// ground height h1 at its column: the rough class (true: G1) and the single-site terms
-bool setUnary(GmrfProblem& p, std::size_t i, float h, int x, int y, int z, double ground,
-              const GroundSegmentationConfig& cfg) {
-  const double d = h - ground;
-  const bool g1 = std::abs(d) <= cfg.delta;
-  const bool in_range = std::abs(d) <= cfg.range_margin;
-  p.unary_ground[i] = static_cast<float>((g1 ? -cfg.alpha : cfg.alpha) + (in_range ? -cfg.alpha : cfg.alpha));
-  p.unary_nonground[i] = static_cast<float>((g1 ? cfg.alpha : -cfg.alpha) + (in_range ? cfg.alpha : -cfg.alpha));
-  p.parity[i] = static_cast<std::uint8_t>((x + y + z) & 1);
-  return g1;
+// Eqs. 19-20 for a voxel d [m] above the ground height h1 at its column: its rough class (true: G1)
+// and its single-site term V1(f) + V1(h|f) for f = ground. That for non-ground is the negative.
+struct Unary {
+  bool g1;
+  float ground;
+};
+Unary unary(double d, double delta, double range_margin, double alpha) {
+  const bool g1 = std::abs(d) <= delta;
+  const bool in_range = std::abs(d) <= range_margin;
+  return {g1, static_cast<float>((g1 ? -alpha : alpha) + (in_range ? -alpha : alpha))};
 }
 
 // A set of tiles of k x k columns and their voxels, laid out tile by tile, column by column
@@ -596,6 +608,10 @@ class TileLayout {
   std::uint32_t id(std::size_t pos) const { return ids_[pos]; }
   std::int32_t z(std::size_t pos) const { return z_[pos]; }
   const float& height(std::size_t pos) const { return height_[pos]; }
+  // the same for every position, by position
+  const std::uint32_t* ids() const { return ids_.data(); }
+  const std::int32_t* zs() const { return z_.data(); }
+  const float* heights() const { return height_.data(); }
   // the heights of the lowest and the highest voxel of tile t [m]
   float lowest(std::size_t t) const { return range_[2 * t]; }
   float highest(std::size_t t) const { return range_[2 * t + 1]; }
@@ -872,7 +888,7 @@ double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& ti
           t,
           [&](int ly, int lx0, const std::uint32_t* bounds) {
             const double at = plane.at((tile.tx * k + lx0 + 0.5) * cell, (tile.ty * k + ly + 0.5) * cell);
-            histogram.addColumns(&layout.height(0), bounds, k - lx0, step, at, plane.a * cell * step);
+            histogram.addColumns(layout.heights(), bounds, k - lx0, step, at, plane.a * cell * step);
           },
           step);
     }
@@ -943,18 +959,34 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
   p.next.resize(3 * m), p.prev.resize(3 * m), p.weight.resize(3 * m);
   ws.rough.resize(m);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+    // arrays through pointers and settings by value held here: the compiler then need not read
+    // them again after every store of a rough class (a byte, which may alias anything)
+    float* const unary_ground = p.unary_ground.data();
+    float* const unary_nonground = p.unary_nonground.data();
+    std::uint8_t* const parity = p.parity.data();
+    std::uint32_t* const prev = p.prev.data();
+    std::uint8_t* const rough = ws.rough.data();
+    float* const ground_height = out.ground_height.data();
+    std::uint8_t* const rough_by_id = out.rough.data();
+    const std::uint32_t* const ids = layout.ids();
+    const std::int32_t* const zs = layout.zs();
+    const float* const heights = layout.heights();
+    const double delta = cfg.delta, range_margin = cfg.range_margin, alpha = cfg.alpha;
+    const Plane plane = ws.planes[t];
     const auto& tile = layout.tiles()[t];
     layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
       const int x = tile.tx * k + lx, y = tile.ty * k + ly;
-      const double ground = ws.planes[t].at((x + 0.5) * cell, (y + 0.5) * cell);
+      const double ground = plane.at((x + 0.5) * cell, (y + 0.5) * cell);
       const bool on_edge = lx == 0 || ly == 0 || lx == k - 1 || ly == k - 1;
       for (auto q = b; q < e; ++q) {
-        const float h = layout.height(q);
-        const bool g1 = setUnary(p, q, h, x, y, layout.z(q), ground, cfg);
-        for (int a = 0; a < 3; ++a) p.prev[3 * q + a] = GmrfProblem::kNone;
-        ws.rough[q] = g1;
-        out.ground_height[layout.id(q)] = static_cast<float>(ground);
-        out.rough[layout.id(q)] = g1;
+        const float h = heights[q];
+        const Unary u = unary(h - ground, delta, range_margin, alpha);
+        unary_ground[q] = u.ground, unary_nonground[q] = -u.ground;
+        parity[q] = static_cast<std::uint8_t>((x + y + zs[q]) & 1);
+        prev[3 * q] = prev[3 * q + 1] = prev[3 * q + 2] = GmrfProblem::kNone;
+        rough[q] = u.g1;
+        ground_height[ids[q]] = static_cast<float>(ground);
+        rough_by_id[ids[q]] = u.g1;
         if (on_edge) edge(q, t, lx, ly, h);
       }
     });
