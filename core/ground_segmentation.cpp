@@ -1047,7 +1047,13 @@ void segmentWhole(const VoxelMap& map, const GroundSegmentationConfig& cfg, Work
     setUnaries(ws, tiles, cell, cfg, out, [](std::uint32_t, std::size_t, int, int, float) {});
     ws.layout.linkNeighbours(ws.problem, cfg, tiles);
     refine(ws, cfg, out);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t q) { out.refined[ws.layout.id(q)] = ws.labels[q]; });
+    // by chunks, through pointers held in locals (a label is a byte, whose store may alias anything)
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+      std::uint8_t* const refined = out.refined.data();
+      const std::uint8_t* const labels = ws.labels.data();
+      const std::uint32_t* const ids = ws.layout.ids();
+      for (std::size_t q = n * c / kChunks, end = n * (c + 1) / kChunks; q < end; ++q) refined[ids[q]] = labels[q];
+    });
   });
 }
 
