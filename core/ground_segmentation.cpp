@@ -783,50 +783,44 @@ class TileLayout {
   Tile tileOf(const Voxel& v) const { return {gx0_ + tile_x_(v.index.x()), gy0_ + tile_y_(v.index.y())}; }
 
   void resizePositions(std::size_t n) {
-    ids_.resize(n), z_.resize(n), height_.resize(n), local_.resize(n);
+    ids_.resize(n), z_.resize(n), height_.resize(n), placed_.resize(n);
   }
-  // puts voxel i, of tile t, at position q
+  // puts voxel i, of tile t, at position q of its tile's voxels as placed
   void place(std::size_t q, std::uint32_t i, const Voxel& v, const Tile& t) {
-    ids_[q] = i;
-    z_[q] = v.index.z();
-    height_[q] = v.height;
-    local_[q] = static_cast<std::uint32_t>((v.index.y() - t.ty * k_) * k_ + (v.index.x() - t.tx * k_));
+    const auto local = static_cast<std::uint32_t>((v.index.y() - t.ty * k_) * k_ + (v.index.x() - t.tx * k_));
+    placed_[q] = {i, local, v.index.z(), v.height};
   }
 
-  // orders each tile's positions (first_[t] .. first_[t + 1], placed) by column and z: a counting
-  // sort by column, then an insertion sort by z inside each column (a column holds few voxels)
+  // lays each tile's voxels as placed (first_[t] .. first_[t + 1]) out by column and z: a counting
+  // sort by column, each voxel inserted by z among those of its column already laid out (a column
+  // holds few voxels)
   void sortColumns() {
     const std::vector<std::uint32_t>& first = first_;
     const std::size_t kk = static_cast<std::size_t>(k_) * k_;
     columns_.resize(tiles_.size() * (kk + 1));
     range_.resize(2 * tiles_.size());
     tbb::parallel_for(std::size_t{0}, tiles_.size(), [&](std::size_t t) {
-      thread_local std::vector<std::uint32_t> fill, id;
-      thread_local std::vector<std::int32_t> zs;
-      thread_local std::vector<float> hs;
+      thread_local std::vector<std::uint32_t> fill;
       const std::uint32_t b = first[t], e = first[t + 1];
-      std::uint32_t* col = columns_.data() + t * (kk + 1);
+      const Placed* const placed = placed_.data();
+      std::uint32_t* const ids = ids_.data();
+      std::int32_t* const zs = z_.data();
+      float* const heights = height_.data();
+      std::uint32_t* const col = columns_.data() + t * (kk + 1);
       std::fill(col, col + kk + 1, 0);
-      for (std::uint32_t q = b; q < e; ++q) ++col[local_[q] + 1];
+      for (std::uint32_t q = b; q < e; ++q) ++col[placed[q].local + 1];
       col[0] = b;
       for (std::size_t c = 0; c < kk; ++c) col[c + 1] += col[c];
       fill.assign(col, col + kk);
-      id.resize(e - b), zs.resize(e - b), hs.resize(e - b);
-      for (std::uint32_t q = b; q < e; ++q) {
-        const std::uint32_t r = fill[local_[q]]++ - b;
-        id[r] = ids_[q], zs[r] = z_[q], hs[r] = height_[q];
-      }
+      std::uint32_t* const next = fill.data();
       float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-      for (std::size_t c = 0; c < kk; ++c) {
-        for (std::uint32_t q = col[c]; q < col[c + 1]; ++q) {
-          const std::uint32_t i = id[q - b];
-          const std::int32_t z = zs[q - b];
-          const float h = hs[q - b];
-          std::uint32_t r = q;
-          for (; r > col[c] && z_[r - 1] > z; --r) ids_[r] = ids_[r - 1], z_[r] = z_[r - 1], height_[r] = height_[r - 1];
-          ids_[r] = i, z_[r] = z, height_[r] = h;
-          lo = std::min(lo, h), hi = std::max(hi, h);
-        }
+      for (std::uint32_t q = b; q < e; ++q) {
+        const Placed v = placed[q];
+        const std::uint32_t start = col[v.local];
+        std::uint32_t r = next[v.local]++;
+        for (; r > start && zs[r - 1] > v.z; --r) ids[r] = ids[r - 1], zs[r] = zs[r - 1], heights[r] = heights[r - 1];
+        ids[r] = v.id, zs[r] = v.z, heights[r] = v.height;
+        lo = std::min(lo, v.height), hi = std::max(hi, v.height);
       }
       range_[2 * t] = lo, range_[2 * t + 1] = hi;
     });
@@ -857,7 +851,13 @@ class TileLayout {
   std::vector<std::uint32_t> ids_;      // voxel id per position
   std::vector<std::int32_t> z_;         // voxel z index per position
   std::vector<float> height_;           // voxel height per position [m]
-  std::vector<std::uint32_t> local_;    // voxel column in its tile per position (while grouping)
+  // a voxel as placed in its tile, before its tile's voxels are laid out by column (while grouping)
+  struct Placed {
+    std::uint32_t id, local;  // voxel id, and its column in its tile (row-major)
+    std::int32_t z;           // voxel z index
+    float height;             // [m]
+  };
+  std::vector<Placed> placed_;  // per position as placed
   std::vector<float> range_;            // per tile: its lowest and highest voxel height [m]
   std::vector<std::uint32_t> first_;    // per tile and one past the last: its first position
   std::vector<std::uint32_t> scratch_;  // per chunk of voxels and grid cell: counts, then offsets (while grouping)
