@@ -267,19 +267,20 @@ IcmResult icm(const GmrfProblem& p, std::vector<std::uint8_t>& ground, int max_i
   // pair once, from its node of colour 0.
   const auto update = [](const Arrays& q, std::uint32_t v, std::uint8_t colour, bool first, double& e, double& d,
                          std::vector<std::uint32_t>& changed) {
+    // a neighbour's pair term for ground, -w if it is ground and w if not (a sign from its label,
+    // without a branch); that for non-ground is its negative
+    const auto term = [&](std::uint32_t u, float w) { return static_cast<double>(w) * (q.ground[u] ? -1.0 : 1.0); };
     double cost_g = q.unary_ground[v], cost_n = q.unary_nonground[v];
     for (int a = 0; a < 3; ++a) {
       const std::uint32_t u = q.next[3 * v + a];
       if (u != GmrfProblem::kNone) {
-        const double w = q.weight[3 * v + a];
-        cost_g += q.ground[u] ? -w : w;
-        cost_n += q.ground[u] ? w : -w;
+        const double t = term(u, q.weight[3 * v + a]);
+        cost_g += t, cost_n -= t;
       }
       const std::uint32_t b = q.prev[3 * v + a];
       if (b != GmrfProblem::kNone) {
-        const double w = q.weight[3 * b + a];
-        cost_g += q.ground[b] ? -w : w;
-        cost_n += q.ground[b] ? w : -w;
+        const double t = term(b, q.weight[3 * b + a]);
+        cost_g += t, cost_n -= t;
       }
     }
     if (first)
