@@ -1295,9 +1295,16 @@ void IncrementalGroundSegmentation::update(VoxelMap& map) {
     layout.linkNeighbours(p, cfg, count);
     refine(ws, cfg, out);
     out.tiles = static_cast<int>(st.tiles.size());
-    tbb::parallel_for(std::size_t{0}, m, [&](std::size_t q) {
-      out.refined[layout.id(q)] = ws.labels[q];
-      voxels[layout.id(q)].label = ws.labels[q] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+    // by chunks, through pointers held in locals (a label is a byte, whose store may alias anything)
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+      std::uint8_t* const refined = out.refined.data();
+      Voxel* const voxel = voxels.data();
+      const std::uint8_t* const labels = ws.labels.data();
+      const std::uint32_t* const ids = layout.ids();
+      for (std::size_t q = m * c / kChunks, end = m * (c + 1) / kChunks; q < end; ++q) {
+        refined[ids[q]] = labels[q];
+        voxel[ids[q]].label = labels[q] ? VoxelLabel::Ground : VoxelLabel::NonGround;
+      }
     });
   });
 }
