@@ -151,6 +151,21 @@ TEST(GroundSegmentationTest, PairWeightFollowsTheExponentialOfTheHeightDifferenc
     EXPECT_EQ(pairWeight(cfg, 3.0f, 3.0f + d), pairWeight(cfg, 3.0f + d, 3.0f));
   }
   EXPECT_LT(worst, 2e-7);
+  // e^-d itself (beta 0, gamma 1) is the correctly rounded float of e^-d but for rare inputs, and
+  // then one unit in the last place off (the rounding of std::exp in double as reference)
+  cfg.beta = 0, cfg.gamma = 1;
+  int off = 0;
+  for (int i = 0; i <= 200000; ++i) {
+    const float d = i * 1e-4f;
+    const float exact = static_cast<float>(std::exp(-static_cast<double>(d)));
+    const float w = pairWeight(cfg, 0.0f, d);
+    if (w != exact) {
+      ++off;
+      EXPECT_TRUE(w == std::nextafter(exact, 0.0f) || w == std::nextafter(exact, 1.0f)) << "d = " << d;
+    }
+  }
+  EXPECT_LE(off, 2);
+  cfg.gamma = 2.0;
   cfg.beta = 0.25;
   EXPECT_FLOAT_EQ(pairWeight(cfg, 0.0f, 1.0f), 0.25f + 2.0f * std::exp(-1.0f));
   EXPECT_FLOAT_EQ(pairWeight(cfg, 0.0f, 120.0f), 0.25f);
