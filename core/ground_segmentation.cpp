@@ -126,27 +126,23 @@ constexpr std::size_t kChunks = 64;
 // the arena the parallel loops run in: `threads` workers, or TBB's default for 0
 tbb::task_arena arenaFor(int threads) { return tbb::task_arena(threads > 0 ? threads : tbb::task_arena::automatic); }
 
-}  // namespace
-
-namespace {
-
 // 2^(j/32) for j = 0 .. 31, each the double nearest it
 constexpr double kExp2Fraction[32] = {
-    0x1.0000000000000p+0, 0x1.059b0d3158574p+0, 0x1.0b5586cf9890fp+0, 0x1.11301d0125b51p+0,
-    0x1.172b83c7d517bp+0, 0x1.1d4873168b9aap+0, 0x1.2387a6e756238p+0, 0x1.29e9df51fdee1p+0,
-    0x1.306fe0a31b715p+0, 0x1.371a7373aa9cbp+0, 0x1.3dea64c123422p+0, 0x1.44e086061892dp+0,
-    0x1.4bfdad5362a27p+0, 0x1.5342b569d4f82p+0, 0x1.5ab07dd485429p+0, 0x1.6247eb03a5585p+0,
-    0x1.6a09e667f3bcdp+0, 0x1.71f75e8ec5f74p+0, 0x1.7a11473eb0187p+0, 0x1.82589994cce13p+0,
-    0x1.8ace5422aa0dbp+0, 0x1.93737b0cdc5e5p+0, 0x1.9c49182a3f090p+0, 0x1.a5503b23e255dp+0,
-    0x1.ae89f995ad3adp+0, 0x1.b7f76f2fb5e47p+0, 0x1.c199bdd85529cp+0, 0x1.cb720dcef9069p+0,
-    0x1.d5818dcfba487p+0, 0x1.dfc97337b9b5fp+0, 0x1.ea4afa2a490dap+0, 0x1.f50765b6e4540p+0,
+    0x1.0000000000000p+0, 0x1.059b0d3158574p+0, 0x1.0b5586cf9890fp+0, 0x1.11301d0125b51p+0, 0x1.172b83c7d517bp+0,
+    0x1.1d4873168b9aap+0, 0x1.2387a6e756238p+0, 0x1.29e9df51fdee1p+0, 0x1.306fe0a31b715p+0, 0x1.371a7373aa9cbp+0,
+    0x1.3dea64c123422p+0, 0x1.44e086061892dp+0, 0x1.4bfdad5362a27p+0, 0x1.5342b569d4f82p+0, 0x1.5ab07dd485429p+0,
+    0x1.6247eb03a5585p+0, 0x1.6a09e667f3bcdp+0, 0x1.71f75e8ec5f74p+0, 0x1.7a11473eb0187p+0, 0x1.82589994cce13p+0,
+    0x1.8ace5422aa0dbp+0, 0x1.93737b0cdc5e5p+0, 0x1.9c49182a3f090p+0, 0x1.a5503b23e255dp+0, 0x1.ae89f995ad3adp+0,
+    0x1.b7f76f2fb5e47p+0, 0x1.c199bdd85529cp+0, 0x1.cb720dcef9069p+0, 0x1.d5818dcfba487p+0, 0x1.dfc97337b9b5fp+0,
+    0x1.ea4afa2a490dap+0, 0x1.f50765b6e4540p+0,
 };
 
 // e^-x for x >= 0 (NaN for NaN). In double: -x / ln 2 = (32 e + j + r) / 32 with whole e and j in
 // 0 .. 31 and |r| <= 1/2, and e^-x = 2^e 2^(j/32) 2^(r/32): the first a shift of the exponent, the
 // second from the table, the third from its Taylor polynomial of degree 4 (relative error below
-// 1.3e-12), so that the float returned is e^-x correctly rounded but for about one x in 10^4 (then
-// one unit in the last place off). Branch-free and inline: 1.8 M voxels weigh three pairs each.
+// 1.3e-12), so that the float returned is e^-x correctly rounded but for about one x in a few
+// million (then one unit in the last place off). Branch-free and inline: 1.8 M voxels weigh three
+// pairs each.
 inline float expNegative(float x) {
   double v = x;
   v = v > 104.0 ? 104.0 : v;  // e^-104 rounds to 0 as a float; keeps e within the double's exponent range
@@ -163,8 +159,8 @@ inline float expNegative(float x) {
   scale += (bits >> 5) << 52;  // adds e to the exponent (wrapping in two's complement for e < 0)
   double s;
   std::memcpy(&s, &scale, sizeof s);
-  const double p = 1.0 + r * (0x1.62e42fefa39efp-6 + r * (0x1.ebfbdff82c58fp-13 + r * (0x1.c6b08d704a0c0p-20 +
-                                                                                       r * 0x1.3b2ab6fba4e77p-27)));
+  const double p = 1.0 + r * (0x1.62e42fefa39efp-6 +
+                              r * (0x1.ebfbdff82c58fp-13 + r * (0x1.c6b08d704a0c0p-20 + r * 0x1.3b2ab6fba4e77p-27)));
   return static_cast<float>(s * p);
 }
 
@@ -783,9 +779,7 @@ class TileLayout {
   // the tile of a voxel of the map being built
   Tile tileOf(const Voxel& v) const { return {gx0_ + tile_x_(v.index.x()), gy0_ + tile_y_(v.index.y())}; }
 
-  void resizePositions(std::size_t n) {
-    ids_.resize(n), z_.resize(n), height_.resize(n), placed_.resize(n);
-  }
+  void resizePositions(std::size_t n) { ids_.resize(n), z_.resize(n), height_.resize(n), placed_.resize(n); }
   // puts voxel i, of tile t, at position q of its tile's voxels as placed
   void place(std::size_t q, std::uint32_t i, const Voxel& v, const Tile& t) {
     const auto local = static_cast<std::uint32_t>((v.index.y() - t.ty * k_) * k_ + (v.index.x() - t.tx * k_));
@@ -858,7 +852,7 @@ class TileLayout {
     std::int32_t z;           // voxel z index
     float height;             // [m]
   };
-  std::vector<Placed> placed_;  // per position as placed
+  std::vector<Placed> placed_;          // per position as placed
   std::vector<float> range_;            // per tile: its lowest and highest voxel height [m]
   std::vector<std::uint32_t> first_;    // per tile and one past the last: its first position
   std::vector<std::uint32_t> scratch_;  // per chunk of voxels and grid cell: counts, then offsets (while grouping)
