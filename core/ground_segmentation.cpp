@@ -606,7 +606,7 @@ class TileLayout {
   std::uint32_t column(std::size_t t, std::size_t c) const { return columns_[t * (k_ * k_ + 1) + c]; }
   std::uint32_t id(std::size_t pos) const { return ids_[pos]; }
   std::int32_t z(std::size_t pos) const { return z_[pos]; }
-  const float& height(std::size_t pos) const { return height_[pos]; }
+  float height(std::size_t pos) const { return height_[pos]; }
   // the same for every position, by position
   const std::uint32_t* ids() const { return ids_.data(); }
   const std::int32_t* zs() const { return z_.data(); }
