@@ -288,18 +288,18 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       }
     }
     const Pose camera_from_world = c.world_from_camera.inverse();
+    const CameraIntrinsics& k = eval::intrinsicsOf(p.calibration(), c);
     const double cell = p.map().voxelSize();
     for (const auto& m : verts) {
       if (!m.raised()) continue;
-      const auto px = project(p.calibration().camera, camera_from_world * Point3((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell, m.height()));
+      const auto px = project(k, camera_from_world * Point3((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell, m.height()));
       if (px) cv::circle(bgr, {static_cast<int>(px->x()), static_cast<int>(px->y())}, 1, cv::Scalar(0, 0, 255), cv::FILLED);
     }
     for (const auto& roof : p.roofCells()) {
-      const auto px = project(p.calibration().camera,
-                              camera_from_world * Point3((roof.cell.x() + 0.5) * cell, (roof.cell.y() + 0.5) * cell, roof.height));
+      const auto px = project(k, camera_from_world * Point3((roof.cell.x() + 0.5) * cell, (roof.cell.y() + 0.5) * cell, roof.height));
       if (px) bgr.at<cv::Vec3b>(static_cast<int>(px->y()), static_cast<int>(px->x())) = cv::Vec3b(0, 140, 255);
     }
-    h << img(bgr, "frame " + std::to_string(c.frame));
+    h << img(bgr, "frame " + std::to_string(c.frame) + ", camera " + p.calibration().cameras.at(c.camera).name);
   }
   h << "</body></html>\n";
   return h.str();

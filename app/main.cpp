@@ -72,10 +72,15 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
   cmd.add_option("--dropout", c.lidar.dropout, "probability a return is lost")->capture_default_str();
   cmd.add_option("--height-cap", c.lidar.height_cap, "returns higher than this above the sensor are dropped [m]")->capture_default_str();
   cmd.add_flag("!--no-camera", c.camera.enabled, "do not render camera frames");
-  cmd.add_option("--width", c.camera.width, "camera image width [px]")->capture_default_str();
-  cmd.add_option("--height", c.camera.height, "camera image height [px]")->capture_default_str();
-  cmd.add_option("--fovy", c.camera.fovy_deg, "camera vertical field of view [deg]")->capture_default_str();
-  cmd.add_option("--camera-pitch", c.camera.pitch_deg, "camera upward tilt [deg]")->capture_default_str();
+  cmd.add_option("--cameras", c.camera.rig,
+                 std::string("camera rig (") + sim::kCameraRigs +
+                     "): surround has a front, left, rear and right camera 90 deg apart that see the whole horizon; "
+                     "forward is the paper's single forward camera. A sim config's 'cameras' list replaces it")
+      ->capture_default_str();
+  cmd.add_option("--width", c.camera.width, "image width [px] of every camera (default: each camera's own, 640)");
+  cmd.add_option("--height", c.camera.height, "image height [px] of every camera (default: each camera's own, 480)");
+  cmd.add_option("--fovy", c.camera.fovy_deg, "vertical field of view [deg] of every camera (default: each camera's own, 75)");
+  cmd.add_option("--camera-pitch", c.camera.pitch_deg, "upward tilt [deg] of every camera (default: each camera's own, 8)");
   cmd.add_option("--gps-sigma", c.gps.horizontal_sigma, "GPS horizontal 1-sigma noise [m]")->capture_default_str();
   cmd.add_option("--gyro-noise", c.gyro.noise_sigma, "gyro 1-sigma noise [rad/s]")->capture_default_str();
   cmd.add_option("--gyro-bias", c.gyro.bias_sigma, "1-sigma of the constant gyro bias [rad/s]")->capture_default_str();
@@ -298,10 +303,17 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
       pipeline.process(*frame);
       // boundary images of every tenth frame (paper Fig. 7)
       if (pipeline.lastBoundaryFrame() != before && pipeline.lastBoundaryFrame() % 10 == 0 &&
-          pipeline.lastBoundaryFrame() != last_written && frame->image) {
+          pipeline.lastBoundaryFrame() != last_written) {
         last_written = pipeline.lastBoundaryFrame();
-        app::writeBoundaryImages(boundary_dir, last_written, pipeline.lastBoundaries(),
-                                 last_written == frame->index ? frame->image->rgb : cv::Mat());
+        for (const auto& b : pipeline.lastBoundaries()) {
+          // the camera image itself only while it is this frame's
+          cv::Mat rgb;
+          for (const auto& image : frame->images) {
+            if (last_written == frame->index && image.camera == b.camera) rgb = image.rgb;
+          }
+          app::writeBoundaryImages(boundary_dir, last_written, pipeline.calibration().cameras.at(b.camera).name,
+                                   b.images, rgb);
+        }
       }
       ++done;
       if (!quiet) progress.update(done);
@@ -673,6 +685,11 @@ int main(int argc, char** argv) {
   run->add_option("--height-cap", run_sim.lidar.height_cap, "lidar returns higher than this above the sensor are dropped [m]")
       ->capture_default_str();
   run->add_option("--threads", run_sim.threads, "lidar simulation threads, 0 = all cores")->capture_default_str();
+  run->add_option("--cameras", run_sim.camera.rig,
+                  std::string("camera rig (") + sim::kCameraRigs +
+                      "): surround sees the whole horizon with four cameras; forward is the paper's single forward "
+                      "camera")
+      ->capture_default_str();
 
   // terrain regress
   CLI::App* reg = app.add_subcommand("regress", "run a suite of scenarios and compare every metric with its baseline");

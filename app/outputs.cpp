@@ -241,9 +241,11 @@ cv::Mat renderHeightMap(const cv::Mat& heights, double lo, double hi, const std:
   return canvas;
 }
 
-void writeBoundaryImages(const fs::path& dir, int frame, const BoundaryImages& images, const cv::Mat& rgb) {
-  char name[64];
-  std::snprintf(name, sizeof name, "%06d", frame);
+void writeBoundaryImages(const fs::path& dir, int frame, const std::string& camera, const BoundaryImages& images,
+                         const cv::Mat& rgb) {
+  char number[64];
+  std::snprintf(number, sizeof number, "%06d_", frame);
+  const std::string name = number + camera;
   // black boundary on white, as in the paper's Figure 7
   writePng(dir / (std::string(name) + "_raw.png"), 255 - images.raw);
   writePng(dir / (std::string(name) + "_cleaned.png"), 255 - images.cleaned);

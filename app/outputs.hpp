@@ -6,15 +6,17 @@
 #include "core/pipeline.hpp"
 
 #include <filesystem>
+#include <string>
 
 namespace terrain::app {
 
 // Writes everything into dir (which exists). Files are written whole or not at all.
 void writeReconstruction(const std::filesystem::path& dir, const Pipeline& pipeline);
 
-// Writes the boundary images of one frame (raw and cleaned) next to the camera image.
-void writeBoundaryImages(const std::filesystem::path& dir, int frame, const BoundaryImages& images,
-                         const cv::Mat& rgb);
+// Writes the boundary images of one camera image (NNNNNN_CAMERA_raw.png, _cleaned.png and, with
+// rgb, _overlay.png).
+void writeBoundaryImages(const std::filesystem::path& dir, int frame, const std::string& camera,
+                         const BoundaryImages& images, const cv::Mat& rgb);
 
 // Colour-mapped height map of a grid of heights (NaN = empty), with a scale bar from lo to hi.
 cv::Mat renderHeightMap(const cv::Mat& heights, double lo, double hi, const std::string& title);

@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr char kMagic[] = "terrain-run-state/4\n";
+constexpr char kMagic[] = "terrain-run-state/5\n";
 
 // little-endian machine layout of plain values, appended to a byte string
 class Out {
@@ -128,10 +128,11 @@ FrameRecord getRecord(In& in) {
   return r;
 }
 
-std::string cameraName(int frame, const char* what) {
+// the file of a kept camera image: frame, camera name, what it is
+std::string cameraName(int frame, const std::string& camera, const char* what) {
   char name[48];
-  std::snprintf(name, sizeof name, "%06d_%s.png", frame, what);
-  return name;
+  std::snprintf(name, sizeof name, "%06d_", frame);
+  return name + camera + "_" + what + ".png";
 }
 
 }  // namespace
@@ -172,16 +173,18 @@ void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::Ru
   t.put<std::uint64_t>(truth.cameras.size());
   for (const auto& c : truth.cameras) {
     t.put<std::int32_t>(c.frame);
+    t.put<std::int32_t>(c.camera);
+    const std::string& camera = pipeline.calibration().cameras.at(c.camera).name;
     const Eigen::Matrix4d m = c.world_from_camera.matrix();
     for (int i = 0; i < 16; ++i) t.put(m(i / 4, i % 4));
-    io::writeFileAtomic(dir / "cameras" / cameraName(c.frame, "rgb"), [&] {
+    io::writeFileAtomic(dir / "cameras" / cameraName(c.frame, camera, "rgb"), [&] {
       std::vector<unsigned char> png;
       cv::Mat bgr;
       cv::cvtColor(c.rgb, bgr, cv::COLOR_RGB2BGR);
       cv::imencode(".png", bgr, png);
       return std::string(png.begin(), png.end());
     }(), true);
-    io::writeFileAtomic(dir / "cameras" / cameraName(c.frame, "seg"), [&] {
+    io::writeFileAtomic(dir / "cameras" / cameraName(c.frame, camera, "seg"), [&] {
       std::vector<unsigned char> png;
       cv::imencode(".png", c.segmentation, png);
       return std::string(png.begin(), png.end());
@@ -292,13 +295,19 @@ SavedRun readRunState(const fs::path& out) {
     const double x = t.get<double>("path"), y = t.get<double>("path"), z = t.get<double>("path");
     q = Point3(x, y, z);
   }
-  run.truth->cameras.resize(static_cast<std::size_t>(t.count("cameras", 132)));
+  run.truth->cameras.resize(static_cast<std::size_t>(t.count("cameras", 136)));
   for (auto& c : run.truth->cameras) {
     c.frame = t.get<std::int32_t>("camera");
+    c.camera = t.get<std::int32_t>("camera");
+    if (c.camera < 0 || c.camera >= static_cast<int>(calibration.cameras.size()))
+      t.fail("camera index " + std::to_string(c.camera) + " is not one of the calibration's " +
+             std::to_string(calibration.cameras.size()) + " cameras");
+    const std::string& camera = calibration.cameras[c.camera].name;
     Eigen::Matrix4d m;
     for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = t.get<double>("camera pose");
     c.world_from_camera.matrix() = m;
-    const fs::path rgb = dir / "cameras" / cameraName(c.frame, "rgb"), seg = dir / "cameras" / cameraName(c.frame, "seg");
+    const fs::path rgb = dir / "cameras" / cameraName(c.frame, camera, "rgb"),
+                   seg = dir / "cameras" / cameraName(c.frame, camera, "seg");
     cv::Mat bgr = cv::imread(rgb.string(), cv::IMREAD_COLOR);
     c.segmentation = cv::imread(seg.string(), cv::IMREAD_UNCHANGED);
     if (bgr.empty()) throw io::InputError(rgb.string() + ": missing or not an image");

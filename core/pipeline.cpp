@@ -2,6 +2,7 @@
 
 #include "core/camera_model.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -47,7 +48,12 @@ void Pipeline::process(const SensorFrame& frame) {
   if (frame.sweep.points.empty()) warn(id + "empty lidar sweep");
   if (frame.gps.empty()) warn(id + "no GPS fix");
   if (frame.gyro.empty()) warn(id + "no gyro samples");
-  if (!frame.image) warn(id + "no camera image");
+  // every camera of the rig is expected to deliver an image with each sweep
+  for (std::size_t c = 0; c < calibration_.cameras.size(); ++c) {
+    const bool delivered = std::any_of(frame.images.begin(), frame.images.end(),
+                                       [c](const CameraImage& i) { return i.camera == static_cast<int>(c); });
+    if (!delivered) warn(id + "no image from camera " + calibration_.cameras[c].name);
+  }
   const auto t0 = Clock::now();
   const GpsUpdate gps = poses_.add(frame);
   if (gps.dropped > 0) {
@@ -154,29 +160,52 @@ void Pipeline::processReady(const SensorFrame& frame) {
   const std::vector<Point3> world = deskewToWorld(frame.sweep, poses_, calibration_.vehicle_from_lidar, &dropped);
   if (dropped > 0) warn(id + std::to_string(dropped) + " lidar points with NaN or infinite values dropped");
   rec.points = world.size();
-  // colour of each point from the image taken with the sweep
+  // the frame's usable images and where each camera was when it took its image
+  struct View {
+    const CameraImage* image;
+    const CameraCalibration* camera;
+    Pose world_from_camera;
+  };
+  std::vector<View> views;
+  for (const CameraImage& image : frame.images) {
+    if (image.camera < 0 || image.camera >= static_cast<int>(calibration_.cameras.size())) {
+      warn(id + "image of camera " + std::to_string(image.camera) + ", which the calibration does not list: ignored");
+      continue;
+    }
+    const CameraCalibration& camera = calibration_.cameras[image.camera];
+    if (image.rgb.empty() || image.rgb.type() != CV_8UC3) {
+      warn(id + "camera " + camera.name + ": image is empty or not 8-bit RGB: ignored");
+      continue;
+    }
+    views.push_back({&image, &camera, poses_.worldFromVehicle(image.time) * camera.vehicle_from_camera});
+  }
+  // colour of each point from the camera that sees it most head-on (the cameras sit close
+  // together on the mast, so the nearest camera is much the same for every one of them)
   std::vector<std::array<std::uint8_t, 4>> colours;
-  const bool has_image = frame.image && !frame.image->rgb.empty() && frame.image->rgb.type() == CV_8UC3;
-  Pose world_from_camera = Pose::Identity();
-  if (has_image) {
-    world_from_camera = poses_.worldFromVehicle(frame.image->time) * calibration_.vehicle_from_camera;
-    const Pose camera_from_world = world_from_camera.inverse();
-    const cv::Mat& rgb = frame.image->rgb;
+  if (!views.empty()) {
+    std::vector<Pose> camera_from_world;
+    for (const View& v : views) camera_from_world.push_back(v.world_from_camera.inverse());
     colours.resize(world.size(), {0, 0, 0, 0});
     for (std::size_t i = 0; i < world.size(); ++i) {
-      const auto px = project(calibration_.camera, camera_from_world * world[i]);
-      if (!px || px->y() >= rgb.rows || px->x() >= rgb.cols) continue;
-      const auto& c = rgb.at<cv::Vec3b>(static_cast<int>(px->y()), static_cast<int>(px->x()));
-      colours[i] = {c[0], c[1], c[2], 1};
+      double best = -1;  // cosine of the angle between the point's ray and the optical axis
+      for (std::size_t c = 0; c < views.size(); ++c) {
+        const Point3 p = camera_from_world[c] * world[i];
+        const cv::Mat& rgb = views[c].image->rgb;
+        const auto px = project(views[c].camera->intrinsics, p);
+        if (!px || px->y() >= rgb.rows || px->x() >= rgb.cols) continue;
+        const double head_on = p.z() / p.norm();
+        if (!(head_on > best)) continue;
+        best = head_on;
+        const auto& colour = rgb.at<cv::Vec3b>(static_cast<int>(px->y()), static_cast<int>(px->x()));
+        colours[i] = {colour[0], colour[1], colour[2], 1};
+      }
     }
-  } else if (frame.image) {
-    warn(id + "camera image is empty or not 8-bit RGB: ignored");
   }
   rec.pose_ms = msSince(t);
 
   // voxel map
   t = Clock::now();
-  rec.new_voxels = map_.insert(world, static_cast<std::uint32_t>(frame.index), has_image ? &colours : nullptr);
+  rec.new_voxels = map_.insert(world, static_cast<std::uint32_t>(frame.index), views.empty() ? nullptr : &colours);
   rec.voxels = map_.size();
   const std::vector<std::uint32_t> new_ids = map_.takeNewVoxels();
   // the incremental segmentation re-segments the tiles that gained voxels (ground.defer_share);
@@ -200,32 +229,36 @@ void Pipeline::processReady(const SensorFrame& frame) {
   }
   rec.segmentation_ms = msSince(t);
 
-  // 2D boundaries and 3D boundary estimation
-  if (has_image) {
+  // 2D boundaries and 3D boundary estimation, in every camera's image: the estimates of a vertex
+  // from all cameras and frames are fused alike
+  if (!views.empty()) last_boundaries_.clear(), last_boundary_frame_ = frame.index;
+  int projected = 0;
+  for (const View& view : views) {
     t = Clock::now();
-    last_boundaries_ = detectBoundaries(frame.image->rgb, config_.boundary);
-    last_boundary_frame_ = frame.index;
-    rec.boundary_ms = msSince(t);
+    const cv::Mat& rgb = view.image->rgb;
+    last_boundaries_.push_back({view.image->camera, detectBoundaries(rgb, config_.boundary)});
+    const BoundaryImages& boundaries = last_boundaries_.back().images;
+    rec.boundary_ms += msSince(t);
     t = Clock::now();
     // the objects in the camera's view, found once for both the clear-line test and the crowns
     std::optional<SkylineOwners> owners;
+    const CameraIntrinsics& k = view.camera->intrinsics;
     if (config_.estimation.clear_line || config_.crown.enabled) {
       owners.emplace(mesh_, map_,
-                     viewRegion(calibration_.camera, world_from_camera,
+                     viewRegion(k, view.world_from_camera,
                                 config_.crown.enabled ? CrownSampler::ownersReach(config_.crown, config_.estimation)
                                                       : config_.estimation.max_distance));
     }
     const SkylineOwners* shared = owners ? &*owners : nullptr;
-    const BoundaryEstimationStats stats =
-        estimateBoundaries(mesh_, map_, last_boundaries_.cleaned, calibration_.camera, world_from_camera,
-                           config_.estimation, frame.image->rgb, shared);
-    rec.estimated_vertices = stats.estimated;
-    if (stats.projected == 0 && !map_.voxels().empty()) warn(id + "the camera sees no non-ground vertex");
+    const BoundaryEstimationStats stats = estimateBoundaries(mesh_, map_, boundaries.cleaned, k, view.world_from_camera,
+                                                             config_.estimation, rgb, shared);
+    rec.estimated_vertices += stats.estimated;
+    projected += stats.projected;
     if (owners) owners->refreshTops(mesh_);
-    crowns_.measure(mesh_, map_, frame.image->rgb, calibration_.camera, world_from_camera, config_.crown,
-                    config_.estimation, shared);
-    rec.estimation_ms = msSince(t);
+    crowns_.measure(mesh_, map_, rgb, k, view.world_from_camera, config_.crown, config_.estimation, shared);
+    rec.estimation_ms += msSince(t);
   }
+  if (!views.empty() && projected == 0 && !map_.voxels().empty()) warn(id + "no camera sees a non-ground vertex");
   rec.total_ms = msSince(start);
   rec.resident_bytes = residentBytes();
   records_.push_back(rec);

@@ -72,8 +72,13 @@ class Pipeline {
   bool restore(std::vector<Voxel> voxels, std::vector<MeshVertex> vertices, SegmentationResult segmentation,
                std::vector<FrameRecord> records, const std::vector<CrownRecord>& crowns = {});
 
-  // the last frame's boundary images (empty if it had no image)
-  const BoundaryImages& lastBoundaries() const { return last_boundaries_; }
+  // The boundary images of the last processed frame that had images, one entry per camera image
+  // (in the frame's image order), and that frame's index (-1: none yet).
+  struct CameraBoundaries {
+    int camera = 0;  // index into calibration().cameras
+    BoundaryImages images;
+  };
+  const std::vector<CameraBoundaries>& lastBoundaries() const { return last_boundaries_; }
   int lastBoundaryFrame() const { return last_boundary_frame_; }
 
  private:
@@ -98,7 +103,7 @@ class Pipeline {
   std::deque<HeldFrame> held_;
   std::vector<FrameRecord> records_;
   std::vector<std::string> warnings_;
-  BoundaryImages last_boundaries_;
+  std::vector<CameraBoundaries> last_boundaries_;
   int last_boundary_frame_ = -1;
   int processed_ = 0;
   bool dirty_ = false;  // points added since the last segmentation

@@ -16,4 +16,11 @@ CameraIntrinsics CameraIntrinsics::fromFovy(int width, int height, double fovy) 
   return k;
 }
 
+int cameraIndex(const RigCalibration& calibration, const std::string& name) {
+  for (std::size_t i = 0; i < calibration.cameras.size(); ++i) {
+    if (calibration.cameras[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 }  // namespace terrain

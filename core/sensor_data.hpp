@@ -7,6 +7,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace terrain {
@@ -27,8 +28,9 @@ struct LidarSweep {
   std::vector<LidarPoint> points;
 };
 
-// One colour image from the camera.
+// One colour image from one of the rig's cameras.
 struct CameraImage {
+  int camera = 0;   // index into RigCalibration::cameras
   double time = 0;  // [s] exposure time
   cv::Mat rgb;      // CV_8UC3, RGB order, row 0 at the top
 };
@@ -66,22 +68,32 @@ struct GeodeticOrigin {
   double altitude_m = 0;
 };
 
-// Geometry of the rig: where each sensor sits on the vehicle and how the camera images.
-struct RigCalibration {
-  CameraIntrinsics camera;
-  Pose vehicle_from_lidar = Pose::Identity();
+// One camera of the rig: its name, how it images and where it sits on the vehicle.
+struct CameraCalibration {
+  std::string name;  // unique within the rig; names the camera's images in datasets and reports
+  CameraIntrinsics intrinsics;
   Pose vehicle_from_camera = Pose::Identity();  // camera frame: x right, y down, z forward
+};
+
+// Geometry of the rig: where each sensor sits on the vehicle and how the cameras image.
+struct RigCalibration {
+  std::vector<CameraCalibration> cameras;  // any number, none included; images refer to them by index
+  Pose vehicle_from_lidar = Pose::Identity();
   Pose vehicle_from_gps = Pose::Identity();     // GPS antenna phase centre
   GeodeticOrigin origin;                        // origin of the world ENU frame
   double gyro_period = 0.005;                   // [s] gyro sample interval
 };
 
-// Everything the rig delivered for one lidar revolution. The camera image, GPS fixes and gyro
-// samples are those whose time falls in (previous sweep end, this sweep end]; any may be missing.
+// The index of the camera named `name` in calibration.cameras, or -1 if there is none.
+int cameraIndex(const RigCalibration& calibration, const std::string& name);
+
+// Everything the rig delivered for one lidar revolution. The camera images (at most one per
+// camera, in camera order), GPS fixes and gyro samples are those whose time falls in (previous
+// sweep end, this sweep end]; any may be missing.
 struct SensorFrame {
   int index = 0;
   LidarSweep sweep;
-  std::optional<CameraImage> image;
+  std::vector<CameraImage> images;
   std::vector<GpsFix> gps;
   std::vector<GyroSample> gyro;
 };

@@ -58,15 +58,24 @@ void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibra
   truth.voxels.add(frame, calibration.vehicle_from_lidar);
   for (const auto& p : frame.truth->poses) truth.path.push_back(p.world_from_vehicle.translation());
   if (truth.camera_stride == 0) truth.camera_stride = camera_every;
-  if (truth.camera_stride > 0 && frame.sensors.index % truth.camera_stride == 0 && frame.sensors.image &&
-      !frame.truth->segmentation.empty()) {
-    CameraTruthFrame c;
-    c.frame = frame.sensors.index;
-    c.rgb = frame.sensors.image->rgb;
-    c.segmentation = frame.truth->segmentation;
-    c.world_from_camera = interpolatePose(frame.truth->poses, frame.sensors.image->time) * calibration.vehicle_from_camera;
-    truth.cameras.push_back(std::move(c));
-    if (truth.cameras.size() > kMaxCameraFrames) {
+  if (truth.camera_stride > 0 && frame.sensors.index % truth.camera_stride == 0) {
+    for (const CameraImage& image : frame.sensors.images) {
+      const auto t = std::find_if(frame.truth->cameras.begin(), frame.truth->cameras.end(),
+                                  [&](const rig::CameraTruth& c) { return c.camera == image.camera; });
+      if (t == frame.truth->cameras.end() || t->segmentation.empty()) continue;
+      if (image.camera < 0 || image.camera >= static_cast<int>(calibration.cameras.size())) continue;
+      CameraTruthFrame c;
+      c.frame = frame.sensors.index;
+      c.camera = image.camera;
+      c.rgb = image.rgb;
+      c.segmentation = t->segmentation;
+      c.world_from_camera =
+          interpolatePose(frame.truth->poses, image.time) * calibration.cameras[image.camera].vehicle_from_camera;
+      truth.cameras.push_back(std::move(c));
+    }
+    std::set<int> kept_frames;
+    for (const auto& c : truth.cameras) kept_frames.insert(c.frame);
+    if (kept_frames.size() > kMaxCameraFrames) {
       // keep the frames on the doubled stride
       truth.camera_stride *= 2;
       std::vector<CameraTruthFrame> kept;
@@ -112,15 +121,21 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
   return out;
 }
 
-std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const CameraIntrinsics& k,
-                                                  const std::vector<CameraTruthFrame>& frames) {
+const CameraIntrinsics& intrinsicsOf(const RigCalibration& calibration, const CameraTruthFrame& frame) {
+  return calibration.cameras.at(static_cast<std::size_t>(frame.camera)).intrinsics;
+}
+
+std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const RigCalibration& calibration,
+                                                  const std::vector<CameraTruthFrame>& images) {
   // geom -> its object
   std::map<int, const scenes::ObjectTruth*> object_of;
   for (const auto& o : world.truth().objects) {
     for (const auto& g : o.geoms) object_of[mj_name2id(world.model(), mjOBJ_GEOM, g.c_str())] = &o;
   }
-  std::map<std::string, TopSightings> out;
-  for (const auto& f : frames) {
+  // the objects whose top (and lower part) each frame's cameras saw
+  std::map<int, std::pair<std::set<std::string>, std::set<std::string>>> by_frame;
+  for (const auto& f : images) {
+    const CameraIntrinsics& k = intrinsicsOf(calibration, f);
     const cv::Mat& seg = f.segmentation;
     const Eigen::Vector3d origin = f.world_from_camera.translation();
     // the height of the point the pixel looks at if it lies on geom g; NaN if another geom hides it
@@ -129,7 +144,7 @@ std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const
       const sim::RayHit hit = world.castRay(origin, dir);
       return hit.geom == g ? origin.z() + hit.distance * dir.z() : std::numeric_limits<double>::quiet_NaN();
     };
-    std::set<std::string> tops, bases;
+    auto& [tops, bases] = by_frame[f.frame];
     for (int v = 0; v < seg.rows; ++v) {
       for (int u = 0; u < seg.cols; ++u) {
         const int g = seg.at<std::uint16_t>(v, u) - 1;
@@ -148,10 +163,13 @@ std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const
           bases.insert(o.id);
       }
     }
-    for (const auto& id : tops) {
+  }
+  std::map<std::string, TopSightings> out;
+  for (const auto& [frame, seen] : by_frame) {
+    for (const auto& id : seen.first) {
       TopSightings& s = out[id];
       ++s.top;
-      s.with_lower_part += bases.count(id) > 0;
+      s.with_lower_part += seen.second.count(id) > 0;
     }
   }
   return out;
@@ -162,11 +180,12 @@ json poseJson(const Pipeline& pipeline, const RunTruth& truth) {
   // record's time) against the pipeline's final pose then
   std::map<int, const FrameRecord*> record_of;
   for (const auto& rec : pipeline.records()) record_of[rec.frame] = &rec;
-  const Pose camera_to_vehicle = pipeline.calibration().vehicle_from_camera.inverse();
   std::vector<double> horizontal, vertical, heading, pitch, roll;
+  std::set<int> scored;  // a frame once, whichever of its cameras
   for (const auto& c : truth.cameras) {
     const auto it = record_of.find(c.frame);
-    if (it == record_of.end()) continue;
+    if (it == record_of.end() || !scored.insert(c.frame).second) continue;
+    const Pose camera_to_vehicle = pipeline.calibration().cameras.at(c.camera).vehicle_from_camera.inverse();
     Pose estimated = Pose::Identity();
     estimated.linear() = it->second->attitude.toRotationMatrix();
     estimated.translation() = it->second->position;
@@ -266,7 +285,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
   // the tops of the objects whose top the camera saw: do they stand at their real height?
   {
-    const std::map<std::string, TopSightings> seen = topSeenFrames(world, pipeline.calibration().camera, truth.cameras);
+    const std::map<std::string, TopSightings> seen = topSeenFrames(world, pipeline.calibration(), truth.cameras);
     json& tops = hr["object_tops"];
     json& list = tops["list"] = json::object();
     // per class: objects seen, at their real height and above it by more than the tolerance, sensed
@@ -343,7 +362,9 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
                      {{"objects", w.seen}, {"at_height_before", w.before}, {"at_height_after", w.after},
                       {"too_high_before", w.high_before}, {"too_high_after", w.high_after}}}};
     }
-    tops["frames"] = truth.cameras.size();
+    std::set<int> kept;
+    for (const auto& c : truth.cameras) kept.insert(c.frame);
+    tops["frames"] = kept.size();
   }
   // roofs of completed building footprints
   const RoofScores roof = scoreRoofCells(pipeline.roofCells(), map.voxelSize(), world);
@@ -435,20 +456,39 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
     }
   }
 
-  // boundary coverage over the kept camera frames
-  double before = 0, after = 0;
-  std::size_t pixels = 0;
+  // boundary coverage over the kept camera images, overall and per camera
+  struct Coverage {
+    double before = 0, after = 0;  // weighted by boundary pixels
+    std::size_t pixels = 0, images = 0;
+  };
+  Coverage all;
+  std::map<int, Coverage> per_camera;
   json frames = json::array();
+  const auto& cameras = pipeline.calibration().cameras;
   for (const auto& c : truth.cameras) {
-    const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world, pipeline.calibration().camera, c, 3);
-    frames.push_back({{"frame", c.frame}, {"before", b.before}, {"after", b.after}, {"boundary_pixels", b.boundary_pixels}});
-    before += b.before * b.boundary_pixels;
-    after += b.after * b.boundary_pixels;
-    pixels += b.boundary_pixels;
+    const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world,
+                                                intrinsicsOf(pipeline.calibration(), c), c, 3);
+    frames.push_back({{"frame", c.frame}, {"camera", cameras.at(c.camera).name}, {"before", b.before},
+                      {"after", b.after}, {"boundary_pixels", b.boundary_pixels}});
+    for (Coverage* k : {&all, &per_camera[c.camera]}) {
+      k->before += b.before * b.boundary_pixels;
+      k->after += b.after * b.boundary_pixels;
+      k->pixels += b.boundary_pixels;
+      ++k->images;
+    }
   }
-  r["boundary_coverage"] = pixels ? after / pixels : 0.0;
-  r["boundary_coverage_before"] = pixels ? before / pixels : 0.0;
+  r["boundary_coverage"] = all.pixels ? all.after / all.pixels : 0.0;
+  r["boundary_coverage_before"] = all.pixels ? all.before / all.pixels : 0.0;
   r["boundary_coverage_frames"] = frames;
+  json& by_camera = r["boundary_coverage_by_camera"] = json::object();
+  for (const auto& [camera, k] : per_camera) {
+    by_camera[cameras.at(camera).name] = {{"after", k.pixels ? k.after / k.pixels : 0.0},
+                                          {"before", k.pixels ? k.before / k.pixels : 0.0},
+                                          {"boundary_pixels", k.pixels},
+                                          {"images", k.images}};
+  }
+  r["cameras"] = json::array();
+  for (const auto& c : cameras) r["cameras"].push_back(c.name);
   r["timing"] = timingJson(pipeline.records());
   return r;
 }

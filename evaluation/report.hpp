@@ -14,9 +14,10 @@
 
 namespace terrain::eval {
 
-// A camera frame kept for boundary coverage: its truth segmentation and true camera pose.
+// A camera image kept for boundary coverage: its truth segmentation and true camera pose.
 struct CameraTruthFrame {
   int frame = 0;
+  int camera = 0;        // index into RigCalibration::cameras
   cv::Mat rgb;           // for the overlay in the HTML report
   cv::Mat segmentation;  // CV_16UC1 geom id + 1
   Pose world_from_camera = Pose::Identity();
@@ -31,9 +32,9 @@ struct RunTruth {
   int camera_stride = 0;  // frames between kept camera frames (0: camera_every)
 };
 
-// Adds one frame's truth. Every `camera_every`-th frame keeps its camera truth (RGB and true
-// segmentation, ~1.5 MB at 640x480); past kMaxCameraFrames kept frames every second one is dropped
-// and the stride doubles, so a long run's memory does not grow with its length.
+// Adds one frame's truth. Every `camera_every`-th frame keeps every camera's truth (RGB and true
+// segmentation, ~1.5 MB a camera at 640x480); past kMaxCameraFrames kept frames every second one is
+// dropped and the stride doubles, so a long run's memory does not grow with its length.
 constexpr std::size_t kMaxCameraFrames = 64;
 void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibration& calibration, int camera_every);
 
@@ -51,6 +52,9 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
                                   const sim::World& world, const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame,
                                   int tolerance);
 
+// The intrinsics of the camera that took a kept image (frame.camera into calibration.cameras).
+const CameraIntrinsics& intrinsicsOf(const RigCalibration& calibration, const CameraTruthFrame& frame);
+
 // How high above its base [m] an object's lower part reaches: the part a vehicle's lidar, capped a
 // little above its roof (1.5 m above a sensor 1.8 m up by default), senses and the method raises.
 constexpr double kLowerPart = 3.0;
@@ -63,12 +67,13 @@ struct TopSightings {
   int with_lower_part = 0;
 };
 
-// The kept camera frames that saw each object's top, by object id: frames in which a top-boundary
+// The kept camera frames that saw each object's top, by object id (a frame counts once however many
+// of its cameras saw it): frames in which a top-boundary
 // pixel of the object (as in boundaryCoverage) looks at a point of it no more than 15 % of its
 // height, and at least 1 m, below its highest point; with_lower_part counts those in which also a
 // bottom-boundary pixel of the object (its lower neighbour another object, the ground or the sky)
 // looks at a point of it within kLowerPart of its base. Objects whose top no frame saw are absent.
-std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const CameraIntrinsics& intrinsics,
+std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const RigCalibration& calibration,
                                                   const std::vector<CameraTruthFrame>& frames);
 
 struct EvaluationOptions {

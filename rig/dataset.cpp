@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -112,11 +113,21 @@ std::vector<T> window(const std::vector<T>& all, double start, double end) {
 
 std::string calibrationToJson(const RigCalibration& c) {
   json j;
-  j["camera"] = {{"width_px", c.camera.width}, {"height_px", c.camera.height}, {"fx_px", c.camera.fx},
-                 {"fy_px", c.camera.fy},       {"cx_px", c.camera.cx},         {"cy_px", c.camera.cy},
-                 {"model", "pinhole, no distortion; camera frame x right, y down, z forward"}};
+  json cameras = json::array();
+  for (const CameraCalibration& cam : c.cameras) {
+    const CameraIntrinsics& k = cam.intrinsics;
+    cameras.push_back({{"name", cam.name},
+                       {"width_px", k.width},
+                       {"height_px", k.height},
+                       {"fx_px", k.fx},
+                       {"fy_px", k.fy},
+                       {"cx_px", k.cx},
+                       {"cy_px", k.cy},
+                       {"model", "pinhole, no distortion; camera frame x right, y down, z forward"},
+                       {"vehicle_from_camera", poseToJson(cam.vehicle_from_camera)}});
+  }
+  j["cameras"] = cameras;
   j["vehicle_from_lidar"] = poseToJson(c.vehicle_from_lidar);
-  j["vehicle_from_camera"] = poseToJson(c.vehicle_from_camera);
   j["vehicle_from_gps"] = poseToJson(c.vehicle_from_gps);
   j["geodetic_origin"] = {{"latitude_deg", c.origin.latitude_deg},
                           {"longitude_deg", c.origin.longitude_deg},
@@ -125,19 +136,64 @@ std::string calibrationToJson(const RigCalibration& c) {
   return j.dump(1) + "\n";
 }
 
+namespace {
+
+CameraIntrinsics intrinsicsFromJson(const json& cam) {
+  CameraIntrinsics k;
+  k.width = cam.at("width_px").get<int>();
+  k.height = cam.at("height_px").get<int>();
+  k.fx = cam.at("fx_px").get<double>();
+  k.fy = cam.at("fy_px").get<double>();
+  k.cx = cam.at("cx_px").get<double>();
+  k.cy = cam.at("cy_px").get<double>();
+  return k;
+}
+
+}  // namespace
+
+void validateCameras(const std::vector<CameraCalibration>& cameras, const std::string& origin) {
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    const CameraCalibration& c = cameras[i];
+    const std::string where = origin + ": camera " + std::to_string(i) + " ('" + c.name + "')";
+    if (c.name.empty()) throw io::InputError(origin + ": camera " + std::to_string(i) + " has no name");
+    if (c.name.find_first_of("/\\.") != std::string::npos || c.name.find_first_of(" \t\n") != std::string::npos)
+      throw io::InputError(where + ": a camera name may not hold '/', '\\', '.' or white space (it names a folder)");
+    for (std::size_t j = 0; j < i; ++j) {
+      if (cameras[j].name == c.name)
+        throw io::InputError(where + ": duplicate camera name (also camera " + std::to_string(j) + ")");
+    }
+    const CameraIntrinsics& k = c.intrinsics;
+    if (k.width <= 0 || k.height <= 0 || !(k.fx > 0) || !(k.fy > 0) || !std::isfinite(k.fx) || !std::isfinite(k.fy) ||
+        !std::isfinite(k.cx) || !std::isfinite(k.cy))
+      throw io::InputError(where + ": size and focal lengths must be positive and finite");
+    if (!c.vehicle_from_camera.matrix().allFinite())
+      throw io::InputError(where + ": vehicle_from_camera must be finite");
+  }
+}
+
 RigCalibration calibrationFromJson(const std::string& text, const std::string& origin) {
   RigCalibration c;
   try {
     const json j = json::parse(text);
-    const json& cam = j.at("camera");
-    c.camera.width = cam.at("width_px").get<int>();
-    c.camera.height = cam.at("height_px").get<int>();
-    c.camera.fx = cam.at("fx_px").get<double>();
-    c.camera.fy = cam.at("fy_px").get<double>();
-    c.camera.cx = cam.at("cx_px").get<double>();
-    c.camera.cy = cam.at("cy_px").get<double>();
+    if (j.contains("cameras")) {
+      if (!j.at("cameras").is_array()) throw io::InputError(origin + ": 'cameras' must be a list");
+      for (const json& cam : j.at("cameras")) {
+        CameraCalibration camera;
+        camera.name = cam.at("name").get<std::string>();
+        camera.intrinsics = intrinsicsFromJson(cam);
+        camera.vehicle_from_camera =
+            poseFromJson(cam.at("vehicle_from_camera"), origin, "vehicle_from_camera of camera '" + camera.name + "'");
+        c.cameras.push_back(camera);
+      }
+    } else {
+      // format 1: one camera, "camera" and "vehicle_from_camera" at the top
+      CameraCalibration camera;
+      camera.name = kLegacyCameraName;
+      camera.intrinsics = intrinsicsFromJson(j.at("camera"));
+      camera.vehicle_from_camera = poseFromJson(j.at("vehicle_from_camera"), origin, "vehicle_from_camera");
+      c.cameras.push_back(camera);
+    }
     c.vehicle_from_lidar = poseFromJson(j.at("vehicle_from_lidar"), origin, "vehicle_from_lidar");
-    c.vehicle_from_camera = poseFromJson(j.at("vehicle_from_camera"), origin, "vehicle_from_camera");
     c.vehicle_from_gps = poseFromJson(j.at("vehicle_from_gps"), origin, "vehicle_from_gps");
     const json& o = j.at("geodetic_origin");
     c.origin = {o.at("latitude_deg").get<double>(), o.at("longitude_deg").get<double>(), o.at("altitude_m").get<double>()};
@@ -145,9 +201,7 @@ RigCalibration calibrationFromJson(const std::string& text, const std::string& o
   } catch (const json::exception& e) {
     throw io::InputError(origin + ": " + e.what());
   }
-  if (c.camera.width <= 0 || c.camera.height <= 0 || !(c.camera.fx > 0) || !(c.camera.fy > 0)) {
-    throw io::InputError(origin + ": camera size and focal lengths must be positive");
-  }
+  validateCameras(c.cameras, origin);
   if (!(c.gyro_period > 0)) throw io::InputError(origin + ": gyro_period_s must be positive");
   return c;
 }
@@ -157,7 +211,11 @@ DatasetWriter::DatasetWriter(fs::path dir, const RigCalibration& calibration, co
     : dir_(std::move(dir)), producer_json_(std::move(producer_json)) {
   io::prepareOutputDir(dir_, force);
   fs::create_directories(dir_ / "lidar");
-  fs::create_directories(dir_ / "camera");
+  validateCameras(calibration.cameras, "rig calibration");
+  for (const auto& c : calibration.cameras) {
+    fs::create_directories(dir_ / "camera" / c.name);
+    camera_names_.push_back(c.name);
+  }
   // a stale manifest from an earlier recording would describe other data
   std::error_code ec;
   fs::remove(dir_ / "manifest.json", ec);
@@ -183,17 +241,28 @@ void DatasetWriter::write(const RigFrame& frame) {
   static const std::vector<PointTruth> kNoTruth;
   io::writeFileAtomic(dir_ / "lidar" / frameName(k, ".pcd"),
                       encodePcd(s.sweep, frame.truth ? frame.truth->points : kNoTruth), true);
-  if (s.image) {
+  for (const CameraImage& image : s.images) {
+    if (image.camera < 0 || image.camera >= static_cast<int>(camera_names_.size()))
+      throw io::InputError(dir_.string() + ": frame " + std::to_string(k) + " has an image of camera " +
+                           std::to_string(image.camera) + ", which the calibration does not list");
+    if (image.time != s.images.front().time)
+      throw io::InputError(dir_.string() + ": frame " + std::to_string(k) +
+                           ": the cameras' images were not taken together (a dataset keeps one camera time per frame)");
     cv::Mat bgr;
-    cv::cvtColor(s.image->rgb, bgr, cv::COLOR_RGB2BGR);
-    writeImage(dir_ / "camera" / frameName(k, ".png"), bgr);
+    cv::cvtColor(image.rgb, bgr, cv::COLOR_RGB2BGR);
+    writeImage(dir_ / "camera" / camera_names_[image.camera] / frameName(k, ".png"), bgr);
   }
-  if (frame.truth && !frame.truth->depth.empty()) writeImage(dir_ / "camera" / frameName(k, "_depth.tiff"), frame.truth->depth);
-  if (frame.truth && !frame.truth->segmentation.empty()) {
-    writeImage(dir_ / "camera" / frameName(k, "_seg.png"), frame.truth->segmentation);
+  if (frame.truth) {
+    for (const CameraTruth& t : frame.truth->cameras) {
+      if (t.camera < 0 || t.camera >= static_cast<int>(camera_names_.size())) continue;
+      const fs::path folder = dir_ / "camera" / camera_names_[t.camera];
+      if (!t.depth.empty()) writeImage(folder / frameName(k, "_depth.tiff"), t.depth);
+      if (!t.segmentation.empty()) writeImage(folder / frameName(k, "_seg.png"), t.segmentation);
+    }
   }
   frames_ << k << ',' << g17(s.sweep.start_time) << ',' << g17(s.sweep.end_time) << ','
-          << (s.image ? g17(s.image->time) : std::string("nan")) << ',' << s.sweep.points.size() << '\n';
+          << (s.images.empty() ? std::string("nan") : g17(s.images.front().time)) << ',' << s.sweep.points.size()
+          << '\n';
   for (const auto& f : s.gps) {
     gps_ << g17(f.time) << ',' << g17(f.latitude_deg) << ',' << g17(f.longitude_deg) << ',' << g17(f.altitude_m)
          << ',' << g17(f.sigma_m) << '\n';
@@ -219,23 +288,25 @@ void DatasetWriter::finish() {
   m["format"] = kDatasetFormat;
   m["frames"] = count_;
   m["ground_truth"] = has_truth_;
+  m["cameras"] = camera_names_;
   m["producer"] = producer_json_.empty() ? json::object() : json::parse(producer_json_);
   m["frames_and_units"] =
       "world: ENU (x east, y north, z up) at calibration.json geodetic_origin; vehicle: x forward, y left, z up, "
       "origin on the ground under the robot; lidar: x forward, y left, z up; camera: x right, y down, z forward. "
       "Metres, radians, seconds.";
   m["files"] = {
-      {"calibration.json", "camera intrinsics [px], 4x4 row-major extrinsics vehicle_from_{lidar,camera,gps}, "
-                           "geodetic origin of the world frame, gyro period [s]"},
+      {"calibration.json", "cameras (name, intrinsics [px], 4x4 row-major vehicle_from_camera), 4x4 row-major "
+                           "extrinsics vehicle_from_{lidar,gps}, geodetic origin of the world frame, gyro period [s]"},
       {"lasers.yaml", "laser table in ROS velodyne driver YAML (vert_correction, rot_correction [rad], offsets [m])"},
-      {"frames.csv", "one row per frame: frame, sweep_start_s, sweep_end_s, camera_time_s (nan: no image), points"},
+      {"frames.csv", "one row per frame: frame, sweep_start_s, sweep_end_s, camera_time_s (every camera's exposure; "
+                     "nan: no images), points"},
       {"lidar/NNNNNN.pcd", "binary PCD, one per sweep: x y z [m, lidar frame at the firing time] float32, "
                            "intensity [0-255] float32, ring (laser id) uint16, azimuth [rad, encoder] float32, "
                            "time [s] float64, label (geom id hit, -1 none) int32, class (0 none, 1 ground, 2 building, "
                            "3 trunk, 4 crown, 5 robot) uint8"},
-      {"camera/NNNNNN.png", "RGB image, 8 bit"},
-      {"camera/NNNNNN_depth.tiff", "ground truth depth along the optical axis [m], float32, 0 = nothing hit"},
-      {"camera/NNNNNN_seg.png", "ground truth segmentation, uint16 = geom id + 1, 0 = sky"},
+      {"camera/NAME/NNNNNN.png", "RGB image of camera NAME (manifest 'cameras'), 8 bit"},
+      {"camera/NAME/NNNNNN_depth.tiff", "ground truth depth along the optical axis [m], float32, 0 = nothing hit"},
+      {"camera/NAME/NNNNNN_seg.png", "ground truth segmentation, uint16 = geom id + 1, 0 = sky"},
       {"gps.csv", "time_s, latitude_deg, longitude_deg, altitude_m (WGS84 ellipsoid), sigma_m"},
       {"gyro.csv", "time_s, wx_rad_s, wy_rad_s, wz_rad_s: mean angular rate over the preceding gyro period, vehicle frame"},
       {"poses_gt.csv", "ground truth world_from_vehicle: time_s, x_m, y_m, z_m, qw, qx, qy, qz"}};
@@ -254,13 +325,38 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
   } catch (const json::parse_error& e) {
     throw io::InputError(manifest_path.string() + ": not valid JSON (" + e.what() + ")");
   }
-  if (!m.is_object() || m.value("format", "") != kDatasetFormat) {
-    throw io::InputError(manifest_path.string() + ": 'format' must be " + kDatasetFormat);
+  const std::string format = m.is_object() && m.contains("format") && m["format"].is_string() ? m["format"].get<std::string>() : "";
+  if (format != kDatasetFormat && format != kDatasetFormatV1) {
+    throw io::InputError(manifest_path.string() + ": 'format' must be " + kDatasetFormat + " (or the older " +
+                         kDatasetFormatV1 + ")");
   }
+  format_version_ = format == kDatasetFormat ? 2 : 1;
   has_truth_ = m.value("ground_truth", false);
   producer_json_ = m.contains("producer") ? m["producer"].dump() : "{}";
   calibration_ = calibrationFromJson(io::readFile(dir_ / "calibration.json"), (dir_ / "calibration.json").string());
   lasers_ = loadLaserCalibration(dir_ / "lasers.yaml");
+  // where each camera's images are: format 1 kept its one camera's images in camera/ itself
+  if (format_version_ == 1) {
+    if (calibration_.cameras.size() != 1)
+      throw io::InputError((dir_ / "calibration.json").string() + ": a format-1 dataset has exactly one camera");
+    camera_dirs_.push_back(dir_ / "camera");
+  } else {
+    std::vector<std::string> names;
+    try {
+      names = m.at("cameras").get<std::vector<std::string>>();
+    } catch (const json::exception&) {
+      throw io::InputError(manifest_path.string() + ": 'cameras' must list the cameras' names");
+    }
+    std::vector<std::string> calibrated;
+    for (const auto& c : calibration_.cameras) calibrated.push_back(c.name);
+    if (names != calibrated)
+      throw io::InputError(manifest_path.string() + ": 'cameras' does not match the cameras of calibration.json");
+    for (const auto& n : names) {
+      if (!fs::is_directory(dir_ / "camera" / n))
+        throw io::InputError(manifest_path.string() + ": camera '" + n + "' has no images (no folder camera/" + n + "/)");
+      camera_dirs_.push_back(dir_ / "camera" / n);
+    }
+  }
   for (const auto& r : readCsv(dir_ / "frames.csv", 5)) {
     frames_.push_back({static_cast<int>(r[0]), r[1], r[2], r[3], !std::isnan(r[3])});
   }
@@ -295,21 +391,33 @@ std::optional<RigFrame> DatasetSource::next() {
   s.sweep.end_time = row.end;
   s.sweep.points = std::move(pcd.points);
   if (row.has_camera) {
-    cv::Mat bgr = readImage(dir_ / "camera" / frameName(row.index, ".png"), cv::IMREAD_COLOR, CV_8UC3);
-    CameraImage img;
-    img.time = row.camera_time;
-    cv::cvtColor(bgr, img.rgb, cv::COLOR_BGR2RGB);
-    s.image = std::move(img);
+    for (std::size_t c = 0; c < camera_dirs_.size(); ++c) {
+      const fs::path image = camera_dirs_[c] / frameName(row.index, ".png");
+      if (!fs::exists(image))
+        throw io::InputError(image.string() + ": missing: frame " + std::to_string(row.index) + " has a camera time but camera '" +
+                             calibration_.cameras[c].name + "' no image");
+      cv::Mat bgr = readImage(image, cv::IMREAD_COLOR, CV_8UC3);
+      CameraImage img;
+      img.camera = static_cast<int>(c);
+      img.time = row.camera_time;
+      cv::cvtColor(bgr, img.rgb, cv::COLOR_BGR2RGB);
+      s.images.push_back(std::move(img));
+    }
   }
   s.gps = window(gps_, row.start, row.end);
   s.gyro = window(gyro_, row.start, row.end);
   if (has_truth_) {
     FrameTruth t;
     t.points = std::move(pcd.truth);
-    const fs::path depth = dir_ / "camera" / frameName(row.index, "_depth.tiff");
-    const fs::path seg = dir_ / "camera" / frameName(row.index, "_seg.png");
-    if (fs::exists(depth)) t.depth = readImage(depth, cv::IMREAD_UNCHANGED, CV_32FC1);
-    if (fs::exists(seg)) t.segmentation = readImage(seg, cv::IMREAD_UNCHANGED, CV_16UC1);
+    for (std::size_t c = 0; c < camera_dirs_.size() && row.has_camera; ++c) {
+      const fs::path depth = camera_dirs_[c] / frameName(row.index, "_depth.tiff");
+      const fs::path seg = camera_dirs_[c] / frameName(row.index, "_seg.png");
+      CameraTruth camera;
+      camera.camera = static_cast<int>(c);
+      if (fs::exists(depth)) camera.depth = readImage(depth, cv::IMREAD_UNCHANGED, CV_32FC1);
+      if (fs::exists(seg)) camera.segmentation = readImage(seg, cv::IMREAD_UNCHANGED, CV_16UC1);
+      if (!camera.depth.empty() || !camera.segmentation.empty()) t.cameras.push_back(std::move(camera));
+    }
     t.poses = window(poses_, row.start, row.end);
     f.truth = std::move(t);
   }

@@ -13,7 +13,11 @@
 
 namespace terrain::rig {
 
-inline constexpr const char* kDatasetFormat = "terrain-dataset/1";
+// Format 2 keeps each camera's images under camera/NAME/; format 1 (one camera, its images in
+// camera/) still loads, its camera named kLegacyCameraName.
+inline constexpr const char* kDatasetFormat = "terrain-dataset/2";
+inline constexpr const char* kDatasetFormatV1 = "terrain-dataset/1";
+inline constexpr const char* kLegacyCameraName = "front";
 
 // Writes frames as they come. Each file is written whole or not at all; the manifest is written
 // last, so a dataset without one is known to be incomplete.
@@ -35,6 +39,7 @@ class DatasetWriter {
   std::string producer_json_;
   std::ofstream frames_, gps_, gyro_, poses_;
   int count_ = 0;
+  std::vector<std::string> camera_names_;  // by camera index
   bool has_truth_ = false;
   bool finished_ = false;
 };
@@ -52,6 +57,8 @@ class DatasetSource : public SensorSource {
 
   // the manifest's "producer" object, as JSON text
   const std::string& producerJson() const { return producer_json_; }
+  // the dataset's format version (1 or 2)
+  int formatVersion() const { return format_version_; }
 
  private:
   struct FrameRow {
@@ -67,12 +74,20 @@ class DatasetSource : public SensorSource {
   std::vector<GyroSample> gyro_;
   std::vector<TimedPose> poses_;
   std::string producer_json_;
+  std::vector<std::filesystem::path> camera_dirs_;  // by camera index
+  int format_version_ = 2;
   bool has_truth_ = false;
   std::size_t cursor_ = 0;
 };
 
-// JSON text of a rig calibration (4x4 row-major extrinsics, intrinsics in pixels), and back.
+// JSON text of a rig calibration (4x4 row-major extrinsics, intrinsics in pixels), and back; the
+// reader also takes format 1's single "camera" and "vehicle_from_camera". Throws io::InputError
+// naming `origin` for a malformed calibration (see validateCameras).
 std::string calibrationToJson(const RigCalibration& calibration);
 RigCalibration calibrationFromJson(const std::string& text, const std::string& origin);
+
+// Throws io::InputError naming `origin` and the camera for a camera without a name or with one that
+// cannot name a folder, a duplicate name, or intrinsics or an extrinsic that are not positive and finite.
+void validateCameras(const std::vector<CameraCalibration>& cameras, const std::string& origin);
 
 }  // namespace terrain::rig

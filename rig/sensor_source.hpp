@@ -25,11 +25,17 @@ struct TimedPose {
   Pose world_from_vehicle = Pose::Identity();
 };
 
+// What one camera's image really showed.
+struct CameraTruth {
+  int camera = 0;        // index into RigCalibration::cameras, as the image's
+  cv::Mat depth;         // CV_32FC1 [m] along the optical axis, 0 where nothing was hit
+  cv::Mat segmentation;  // CV_16UC1 geom id + 1 per pixel, 0 for sky
+};
+
 // Ground truth for one frame; only simulated and recorded-from-simulation sources have it.
 struct FrameTruth {
   std::vector<PointTruth> points;  // one per LidarSweep point, same order
-  cv::Mat depth;                   // CV_32FC1 [m] along the optical axis, 0 where nothing was hit
-  cv::Mat segmentation;            // CV_16UC1 geom id + 1 per pixel, 0 for sky
+  std::vector<CameraTruth> cameras;  // one per image of the frame that has truth
   std::vector<TimedPose> poses;    // true vehicle poses in the frame's time window
 };
 

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <map>
 
 namespace terrain::rig {
 
@@ -185,9 +186,14 @@ void LidarSwapSource::pullUntil(double time) {
     pulled_until_ = s.sweep.end_time;
     gps_.insert(gps_.end(), s.gps.begin(), s.gps.end());
     gyro_.insert(gyro_.end(), s.gyro.begin(), s.gyro.end());
-    if (s.image) {
-      Image im{s.image->time, *s.image, {}, {}};
-      if (f->truth) im.depth = f->truth->depth, im.segmentation = f->truth->segmentation;
+    for (const CameraImage& image : s.images) {
+      Image im{image.time, image, {}};
+      im.truth.camera = image.camera;
+      if (f->truth) {
+        for (const CameraTruth& t : f->truth->cameras) {
+          if (t.camera == image.camera) im.truth = t;
+        }
+      }
       images_.push_back(std::move(im));
     }
     if (f->truth) {
@@ -222,10 +228,15 @@ std::optional<RigFrame> LidarSwapSource::next() {
   take(gyro_, s.gyro);
   std::vector<Image> images;
   take(images_, images);
-  if (!images.empty()) s.image = images.back().image;
+  // each camera's latest image of the window, in camera order
+  std::map<int, const Image*> latest;
+  for (const Image& im : images) latest[im.image.camera] = &im;
+  for (const auto& [camera, im] : latest) s.images.push_back(im->image);
   if (has_truth_) {
     FrameTruth t;
-    if (!images.empty()) t.depth = images.back().depth, t.segmentation = images.back().segmentation;
+    for (const auto& [camera, im] : latest) {
+      if (!im->truth.depth.empty() || !im->truth.segmentation.empty()) t.cameras.push_back(im->truth);
+    }
     // poses over the sweep and one either side, for interpolation
     const double start = sweep->start_time;
     auto first = std::find_if(poses_.begin(), poses_.end(), [&](const TimedPose& p) { return p.time >= start; });

@@ -132,7 +132,7 @@ class LidarSwapSource : public SensorSource {
   struct Image {
     double time = 0;
     CameraImage image;
-    cv::Mat depth, segmentation;
+    CameraTruth truth;  // empty images where the other source has no truth
   };
   std::vector<Image> images_;
   std::vector<TimedPose> poses_;

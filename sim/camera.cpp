@@ -20,7 +20,7 @@ struct CameraRenderer::Gl {
   mjvCamera camera;
 };
 
-CameraRenderer::CameraRenderer(const World& world, const CameraConfig& config)
+CameraRenderer::CameraRenderer(const World& world, const CameraMount& config)
     : world_(world), config_(config), gl_(std::make_unique<Gl>()) {
   model_ = mj_copyModel(nullptr, world.model());
   camera_ = mj_name2id(model_, mjOBJ_CAMERA, "robot_camera");

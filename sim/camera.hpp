@@ -22,7 +22,7 @@ class CameraRenderer {
  public:
   // Needs a camera named "robot_camera" in the scene. Throws io::InputError if the scene has none
   // or OSMesa cannot create a context.
-  CameraRenderer(const World& world, const CameraConfig& config);
+  CameraRenderer(const World& world, const CameraMount& config);
   ~CameraRenderer();
   CameraRenderer(const CameraRenderer&) = delete;
   CameraRenderer& operator=(const CameraRenderer&) = delete;
@@ -39,7 +39,7 @@ class CameraRenderer {
  private:
   struct Gl;
   const World& world_;
-  CameraConfig config_;
+  CameraMount config_;
   bool segmentation_pass_with_terrain_ = false;
   mjModel* model_ = nullptr;  // own copy: fovy and buffer size follow the config
   mjData* data_ = nullptr;

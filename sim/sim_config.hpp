@@ -6,7 +6,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
+#include <vector>
 
 namespace terrain::sim {
 
@@ -29,13 +31,39 @@ struct LidarConfig {
   double height_cap = 1.5;          // [m] returns higher than this above the sensor (lidar z) are not reported
 };
 
-struct CameraConfig {
-  bool enabled = true;
+// One camera of the simulated rig. Its optical axis points at azimuth yaw_deg from the vehicle's
+// forward axis (counter-clockwise seen from above: 90 looks left), tilted up by pitch_deg; roll_deg
+// turns the camera about its optical axis (positive: the image's top edge to the camera's left).
+struct CameraMount {
+  std::string name = "front";       // unique within the rig
+  Eigen::Vector3d position{0.25, 0.0, 1.6};  // [m] vehicle frame, outside the robot's body
+  double yaw_deg = 0.0;             // [deg] in [-180, 180]
+  double pitch_deg = 8.0;           // [deg] upward tilt of the optical axis, in [-45, 45]
+  double roll_deg = 0.0;            // [deg] in [-45, 45]
   int width = 640, height = 480;    // [px] in [16, 4096]
   double fovy_deg = 75.0;           // [deg] vertical field of view, in (0, 180)
-  double pitch_deg = 8.0;           // [deg] upward tilt of the optical axis, in [-45, 45]
-  Eigen::Vector3d position{0.25, 0.0, 1.6};  // [m] vehicle frame
 };
+
+// The named camera rigs: "surround" (front, left, rear and right, 90 degrees apart, 91 degrees
+// across each at 640 x 480 and fovy 75: the whole horizon) and "forward" (the paper's single
+// forward camera, the surround rig's front camera). Throws io::InputError for another name.
+std::vector<CameraMount> cameraRig(const std::string& name);
+// the names cameraRig() knows, for messages and --help
+inline constexpr const char* kCameraRigs = "surround, forward";
+
+struct CameraConfig {
+  bool enabled = true;
+  std::string rig = "surround";      // a named rig (cameraRig), used when `cameras` is empty
+  std::vector<CameraMount> cameras;  // an explicit rig (YAML list `cameras`); replaces `rig`
+  // set on every camera of the rig when given (0 or NaN: each camera's own)
+  int width = 0, height = 0;         // [px]
+  double fovy_deg = std::numeric_limits<double>::quiet_NaN();   // [deg]
+  double pitch_deg = std::numeric_limits<double>::quiet_NaN();  // [deg]
+};
+
+// The cameras a configuration puts on the robot: the explicit list or the named rig, with the
+// rig-wide settings applied; empty when the camera is disabled.
+std::vector<CameraMount> rigCameras(const CameraConfig& config);
 
 struct GpsConfig {
   double rate_hz = 10.0;             // [Hz] in (0, 100]

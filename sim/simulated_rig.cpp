@@ -17,16 +17,26 @@ long long firstIndexAtOrAfter(double t, double period) { return static_cast<long
 
 RigCalibration SimulatedRig::calibrationFor(const SimConfig& c, const GeodeticOrigin& origin) {
   RigCalibration cal;
-  cal.camera = CameraIntrinsics::fromFovy(c.camera.width, c.camera.height, c.camera.fovy_deg * kDegToRad);
   cal.vehicle_from_lidar = Pose::Identity();
   cal.vehicle_from_lidar.translation() = Vector3(0, 0, c.robot.mast_height);
-  // camera looks forward, tilted up by pitch: z forward, x right, y down
-  const double p = c.camera.pitch_deg * kDegToRad;
-  cal.vehicle_from_camera = Pose::Identity();
-  cal.vehicle_from_camera.linear().col(0) = Vector3(0, -1, 0);
-  cal.vehicle_from_camera.linear().col(1) = Vector3(std::sin(p), 0, -std::cos(p));
-  cal.vehicle_from_camera.linear().col(2) = Vector3(std::cos(p), 0, std::sin(p));
-  cal.vehicle_from_camera.translation() = c.camera.position;
+  for (const CameraMount& m : rigCameras(c.camera)) {
+    CameraCalibration camera;
+    camera.name = m.name;
+    camera.intrinsics = CameraIntrinsics::fromFovy(m.width, m.height, m.fovy_deg * kDegToRad);
+    // a camera looking forward, tilted up by pitch (z forward, x right, y down), turned by yaw
+    // about the vehicle's z axis and by roll about its optical axis
+    const double p = m.pitch_deg * kDegToRad;
+    Eigen::Matrix3d forward;
+    forward.col(0) = Vector3(0, -1, 0);
+    forward.col(1) = Vector3(std::sin(p), 0, -std::cos(p));
+    forward.col(2) = Vector3(std::cos(p), 0, std::sin(p));
+    const Eigen::Matrix3d yaw = Eigen::AngleAxisd(m.yaw_deg * kDegToRad, Vector3::UnitZ()).toRotationMatrix();
+    const Eigen::Matrix3d roll = Eigen::AngleAxisd(m.roll_deg * kDegToRad, Vector3::UnitZ()).toRotationMatrix();
+    camera.vehicle_from_camera = Pose::Identity();
+    camera.vehicle_from_camera.linear() = m.yaw_deg == 0 && m.roll_deg == 0 ? forward : Eigen::Matrix3d(yaw * forward * roll);
+    camera.vehicle_from_camera.translation() = m.position;
+    cal.cameras.push_back(camera);
+  }
   cal.vehicle_from_gps = Pose::Identity();
   cal.vehicle_from_gps.translation() = c.gps.antenna;
   cal.origin = origin;
@@ -50,7 +60,7 @@ SimulatedRig::SimulatedRig(std::shared_ptr<const World> world, const SimConfig& 
   trajectory_ = std::make_unique<Trajectory>(*world_, world_->truth().path, config_.robot);
   lidar_ = std::make_unique<LidarSimulator>(*world_, *caster_, std::move(lasers), config_.lidar,
                                             calibration_.vehicle_from_lidar, config_.seed, config_.threads);
-  if (config_.camera.enabled) camera_ = std::make_unique<CameraRenderer>(*world_, config_.camera);
+  for (const CameraMount& m : rigCameras(config_.camera)) cameras_.push_back(std::make_unique<CameraRenderer>(*world_, m));
 }
 
 SimulatedRig::~SimulatedRig() = default;
@@ -72,13 +82,12 @@ std::optional<rig::RigFrame> SimulatedRig::next() {
   s.sweep = std::move(sweep.sweep);
   truth.points = std::move(sweep.truth);
 
-  // camera exposure at the start of the sweep
-  if (camera_) {
-    const Pose world_from_camera = trajectory_->worldFromVehicle(start) * calibration_.vehicle_from_camera;
-    CameraRender r = camera_->render(world_from_camera);
-    s.image = CameraImage{start, r.rgb};
-    truth.depth = r.depth;
-    truth.segmentation = r.segmentation;
+  // every camera's exposure at the start of the sweep
+  for (std::size_t c = 0; c < cameras_.size(); ++c) {
+    const Pose world_from_camera = trajectory_->worldFromVehicle(start) * calibration_.cameras[c].vehicle_from_camera;
+    CameraRender r = cameras_[c]->render(world_from_camera);
+    s.images.push_back(CameraImage{static_cast<int>(c), start, r.rgb});
+    truth.cameras.push_back({static_cast<int>(c), r.depth, r.segmentation});
   }
   // GPS fixes and gyro samples whose time lies in [start, end)
   const double gps_period = 1.0 / config_.gps.rate_hz;

@@ -12,6 +12,7 @@
 #include "sim/world.hpp"
 
 #include <memory>
+#include <vector>
 
 namespace terrain::sim {
 
@@ -47,7 +48,7 @@ class SimulatedRig : public rig::SensorSource {
   std::unique_ptr<RayCaster> caster_;
   std::unique_ptr<Trajectory> trajectory_;
   std::unique_ptr<LidarSimulator> lidar_;
-  std::unique_ptr<CameraRenderer> camera_;
+  std::vector<std::unique_ptr<CameraRenderer>> cameras_;  // one per calibration camera
   GpsModel gps_;
   GyroModel gyro_;
 };

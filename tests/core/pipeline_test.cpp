@@ -104,9 +104,9 @@ TEST(PipelineTest, BadFramesGiveWarningsNotCrashes) {
     if (k == 12) s.sweep.points.clear();                     // empty sweep
     if (k == 13) s.sweep.points[5].x = std::nanf("");        // NaN point
     if (k == 14) s.sweep.points[6].z = INFINITY;             // infinite point
-    if (k == 15) s.image.reset();                            // no image
+    if (k == 15) s.images.clear();                           // no image
     if (k == 16) s.gps.clear();                              // no GPS fix
-    if (k == 17) s.image->rgb = cv::Mat();                   // empty image
+    if (k == 17) s.images.at(0).rgb = cv::Mat();             // empty image
     if (k == 18) s.gyro.clear();                             // no gyro
     pipeline.process(s);
     ++k;
@@ -116,9 +116,9 @@ TEST(PipelineTest, BadFramesGiveWarningsNotCrashes) {
   EXPECT_TRUE(has("frame 12: empty lidar sweep"));
   EXPECT_TRUE(has("frame 13: 1 lidar points with NaN"));
   EXPECT_TRUE(has("frame 14: 1 lidar points with NaN"));
-  EXPECT_TRUE(has("frame 15: no camera image"));
+  EXPECT_TRUE(has("frame 15: no image from camera front"));
   EXPECT_TRUE(has("frame 16: no GPS fix"));
-  EXPECT_TRUE(has("frame 17: camera image is empty"));
+  EXPECT_TRUE(has("frame 17: camera front: image is empty"));
   EXPECT_TRUE(has("frame 18: no gyro samples"));
   EXPECT_EQ(pipeline.records().size(), 30u);
   for (const auto& v : pipeline.map().voxels()) ASSERT_TRUE(std::isfinite(v.height));

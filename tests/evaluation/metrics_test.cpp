@@ -88,11 +88,13 @@ TEST(RunTruthTest, CameraFramesThinOutOverALongRun) {
   for (int i = 0; i < 1000; ++i) {
     rig::RigFrame f;
     f.sensors.index = i;
-    f.sensors.image = CameraImage{0.1 * i, cv::Mat(4, 4, CV_8UC3, cv::Scalar(1, 2, 3))};
+    f.sensors.images.push_back(CameraImage{0, 0.1 * i, cv::Mat(4, 4, CV_8UC3, cv::Scalar(1, 2, 3))});
     f.truth = rig::FrameTruth{};
-    f.truth->segmentation = cv::Mat(4, 4, CV_16UC1, cv::Scalar(1));
+    f.truth->cameras.push_back({0, cv::Mat(), cv::Mat(4, 4, CV_16UC1, cv::Scalar(1))});
     f.truth->poses.push_back({0.1 * i, Pose::Identity()});
-    addFrameTruth(truth, f, RigCalibration{}, 10);
+    RigCalibration calibration;
+    calibration.cameras.push_back({"front", CameraIntrinsics{}, Pose::Identity()});
+    addFrameTruth(truth, f, calibration, 10);
     ASSERT_LE(truth.cameras.size(), kMaxCameraFrames) << "frame " << i;
   }
   // strides 10 -> 20 (at frame 640) -> 40 (at frame 1280: not reached)
@@ -184,7 +186,9 @@ TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtItItsLowerPartWhenIt
             static_cast<std::uint16_t>(world->castRay(f.world_from_camera.translation(), dir).geom + 1);
       }
     }
-    const auto seen = topSeenFrames(*world, k, {f});
+    RigCalibration calibration;
+    calibration.cameras.push_back({"front", k, Pose::Identity()});
+    const auto seen = topSeenFrames(*world, calibration, {f});
     SCOPED_TRACE(testing::Message() << c.distance << " m, tilted " << c.pitch_deg << " deg");
     ASSERT_EQ(seen.count("wall"), c.top < 0 ? 0u : 1u);
     if (c.top < 0) continue;

@@ -5,6 +5,7 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace terrain::sim {
 namespace {
@@ -23,14 +24,68 @@ std::string errorOf(const test::TempDir& dir, const std::string& yaml) {
 
 TEST(SimConfigTest, YamlFillsTheNamedFields) {
   test::TempDir dir;
-  io::writeFileAtomic(dir / "sim.yaml", "seed: 7\nrobot:\n  speed: 1.5\nlidar:\n  height_cap: 3.0\ncamera:\n  position: [0.1, 0, 1.5]\n", true);
+  io::writeFileAtomic(dir / "sim.yaml", "seed: 7\nrobot:\n  speed: 1.5\nlidar:\n  height_cap: 3.0\ncamera:\n  rig: forward\n  width: 320\n", true);
   SimConfig c;
   loadSimConfig(dir / "sim.yaml", c);
   EXPECT_EQ(c.seed, 7u);
   EXPECT_EQ(c.robot.speed, 1.5);
   EXPECT_EQ(c.lidar.height_cap, 3.0);
-  EXPECT_EQ(c.camera.position, Eigen::Vector3d(0.1, 0, 1.5));
+  EXPECT_EQ(c.camera.rig, "forward");
   EXPECT_EQ(c.lidar.range_noise, 0.02);  // untouched fields keep their defaults
+  // the rig-wide width applies to every camera of the named rig
+  const std::vector<CameraMount> rig = rigCameras(c.camera);
+  ASSERT_EQ(rig.size(), 1u);
+  EXPECT_EQ(rig[0].width, 320);
+  EXPECT_EQ(rig[0].height, 480);
+}
+
+TEST(SimConfigTest, AnExplicitCameraListReplacesTheNamedRig) {
+  test::TempDir dir;
+  io::writeFileAtomic(dir / "sim.yaml",
+                      "cameras:\n"
+                      "  - {name: up_front, position: [0.3, 0, 1.7], pitch_deg: 20}\n"
+                      "  - {name: back, position: [-0.3, 0, 1.7], yaw_deg: 180, roll_deg: 5, width: 320, height: 200, fovy_deg: 60}\n"
+                      "camera:\n  pitch_deg: 10\n",
+                      true);
+  SimConfig c;
+  loadSimConfig(dir / "sim.yaml", c);
+  validate(c);
+  const std::vector<CameraMount> rig = rigCameras(c.camera);
+  ASSERT_EQ(rig.size(), 2u);
+  EXPECT_EQ(rig[0].name, "up_front");
+  EXPECT_EQ(rig[0].position, Eigen::Vector3d(0.3, 0, 1.7));
+  EXPECT_EQ(rig[0].pitch_deg, 10);  // camera.pitch_deg sets every camera's
+  EXPECT_EQ(rig[1].name, "back");
+  EXPECT_EQ(rig[1].yaw_deg, 180);
+  EXPECT_EQ(rig[1].roll_deg, 5);
+  EXPECT_EQ(rig[1].width, 320);
+  EXPECT_EQ(rig[1].height, 200);
+  EXPECT_EQ(rig[1].fovy_deg, 60);
+  // the JSON of the settings lists the cameras as they are put on the robot
+  const auto j = nlohmann::json::parse(simConfigToJson(c));
+  ASSERT_EQ(j["cameras"].size(), 2u);
+  EXPECT_EQ(j["cameras"][1]["name"], "back");
+  EXPECT_EQ(j["camera"]["rig"], "custom");
+}
+
+TEST(SimConfigTest, BadCameraRigsAreNamed) {
+  test::TempDir dir;
+  EXPECT_NE(errorOf(dir, "camera:\n  rig: panorama\n").find("unknown camera rig 'panorama' (known: surround, forward)"),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "cameras: []\n").find("the camera list is empty"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: a, position: [0.3, 0, 1.6]}\n  - {name: a, position: [-0.3, 0, 1.6], yaw_deg: 180}\n")
+                .find("duplicate camera name 'a'"),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {position: [0.3, 0, 1.6]}\n").find("a camera needs a name"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: a, zoom: 2}\n").find("unknown camera field 'zoom'"), std::string::npos);
+  // inside the chassis, and behind the mast looking at it
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: low, position: [0, 0.2, 0.4]}\n").find("'low'): the camera sits inside the robot's body"),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: back, position: [-0.3, 0, 1.2], pitch_deg: 0}\n")
+                .find("'back'): the camera looks into the robot's body"),
+            std::string::npos);
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: down, position: [0.3, 0, 1.6], pitch_deg: -60}\n").find("pitch_deg = -60 is out of range"),
+            std::string::npos);
 }
 
 TEST(SimConfigTest, OneCommandLineSettingIsReadAsYaml) {
