@@ -200,18 +200,21 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
     const std::uint16_t expected = (b % blocks_per_firing == 0) ? kUpperBlock : kLowerBlock;
     if (id != expected) {
       ++stats_.bad_block;
+      ++rejected_since_;
       return false;
     }
     steps[b] = get16(block + 2);
-    if (steps[b] >= kStepsPerTurn ||
+    if (steps[b] > kStepsPerTurn ||
         (b > 0 && (steps[b] - steps[b - 1] + kStepsPerTurn) % kStepsPerTurn > kMaxStepJump)) {
       ++stats_.bad_position;
+      ++rejected_since_;
       return false;
     }
   }
   const std::uint32_t stamp = payloadTimestamp(data);
   if (stamp >= kMicrosPerHour) {
     ++stats_.bad_timestamp;
+    ++rejected_since_;
     return false;
   }
   // time order: an hour rollover moves on, anything older than the last packet is refused
@@ -230,8 +233,10 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
     }
     const double packet_us = timing_.firings_per_packet * timing_.firing_period * 1e6;
     const double gap = (time_us - last_time_us_) / packet_us;
-    if (gap > 1.5) stats_.lost += std::llround(gap) - 1;
+    // the slots between the two packets that rejected packets took were not lost
+    if (gap > 1.5) stats_.lost += std::max(0LL, std::llround(gap) - 1 - rejected_since_);
   }
+  rejected_since_ = 0;
   hours_ = hours;
   last_time_us_ = time_us;
   std::memcpy(last_payload_.data(), data, kPacketSize);
@@ -262,7 +267,8 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
       last_step_ = step;
     }
     const int first_laser = (b % blocks_per_firing) * kReturnsPerBlock;
-    const double ca = (*cos_step_)[step], sa = (*sin_step_)[step];
+    const int direction = step % kStepsPerTurn;  // 36000 is 0 degrees
+    const double ca = (*cos_step_)[direction], sa = (*sin_step_)[direction];
     for (int i = 0; i < kReturnsPerBlock; ++i) {
       const std::uint8_t* r = block + 4 + 3 * i;
       const std::uint16_t raw = get16(r);
@@ -281,7 +287,7 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
       p.z = static_cast<float>(range * sin_vert_[laser] + l.vert_offset);
       p.intensity = r[2];
       p.ring = static_cast<std::uint16_t>(laser);
-      p.azimuth = static_cast<float>(stepToRadians(step));
+      p.azimuth = static_cast<float>(stepToRadians(direction));
       p.time = t;
       current_.points.push_back(p);
       ++stats_.points;

@@ -106,11 +106,11 @@ struct DecodeStats {
   long long accepted = 0;       // decoded into points
   long long wrong_size = 0;     // not 1206 bytes (truncated or oversized)
   long long bad_block = 0;      // unknown block id, block order wrong for the model
-  long long bad_position = 0;   // rotational position >= 36000 or jumping inside the packet
+  long long bad_position = 0;   // rotational position > 36000 or jumping inside the packet (36000 is 0 degrees)
   long long bad_timestamp = 0;  // timestamp beyond the hour
   long long duplicates = 0;     // the same packet again
   long long out_of_order = 0;   // older than the last accepted packet
-  long long lost = 0;           // packets missing by the timestamps
+  long long lost = 0;           // packets missing by the timestamps (rejected ones not among them)
   long long points = 0;         // returns decoded
   long long sweeps = 0;         // sweeps completed
 
@@ -127,6 +127,8 @@ struct DecoderOptions {
 
 // Decodes packets into sweeps. A sweep ends where the rotational position wraps (a firing at a
 // lower position than the one before it); its end time is the first firing of the next sweep.
+// Position 36000, which real sensors send now and then just before the wrap, is 360 degrees: the
+// direction of 0, in the sweep before the wrap (as PCL's and VeloView's decoders take it).
 // Packets that fail a check are counted and skipped; a packet never reaches a sweep in part.
 class SweepAssembler {
  public:
@@ -157,6 +159,7 @@ class SweepAssembler {
   long long hours_ = 0;
   Payload last_payload_{};
   bool have_payload_ = false;
+  long long rejected_since_ = 0;  // packets rejected for their content since the last accepted one
   DecodeStats stats_;
 };
 

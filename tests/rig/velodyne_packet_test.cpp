@@ -222,7 +222,7 @@ TEST(VelodynePacketTest, BadPacketsAreCountedAndSkipped) {
       bad[500] = 0x12;
       EXPECT_FALSE(a.push(bad.data(), bad.size(), out));
       bad = p;
-      bad[202] = 0xA0, bad[203] = 0x8C;  // 36000
+      bad[202] = 0xA1, bad[203] = 0x8C;  // 36001: past a turn
       EXPECT_FALSE(a.push(bad.data(), bad.size(), out));
       bad = p;
       bad[602] = static_cast<std::uint8_t>(bad[602] + 0x10), bad[603] = static_cast<std::uint8_t>(bad[603] + 0x10);
@@ -251,6 +251,64 @@ TEST(VelodynePacketTest, BadPacketsAreCountedAndSkipped) {
   EXPECT_EQ(st.lost, 0);
   ASSERT_EQ(out.size(), s.clean.size());
   for (std::size_t k = 0; k < out.size(); ++k) ASSERT_EQ(out[k].points.size(), s.clean[k].points.size());
+}
+
+// Real sensors send position 36000 now and then just before the wrap (..., 35979, 36000, 18, ...):
+// it is 360 degrees, the direction of 0, and the packet keeps its returns.
+TEST(VelodynePacketTest, PositionThirtySixThousandIsZeroDegreesAndKeepsItsReturns) {
+  const Stream& s = stream();
+  const Payload& original = s.packets[5].payload;
+  Payload p = original;
+  // the packet's six firings (two blocks each) at 35985, 35988, ..., 36000
+  for (int b = 0; b < 12; ++b) {
+    const int step = 35985 + 3 * (b / 2);
+    p[b * 100 + 2] = static_cast<std::uint8_t>(step & 0xFF), p[b * 100 + 3] = static_cast<std::uint8_t>(step >> 8);
+  }
+  SweepAssembler a(s.lasers), reference(s.lasers);
+  std::vector<LidarSweep> out;
+  ASSERT_TRUE(a.push(p.data(), p.size(), out));
+  ASSERT_TRUE(reference.push(original.data(), original.size(), out));
+  EXPECT_EQ(a.stats().bad_position, 0);
+  EXPECT_EQ(a.stats().points, reference.stats().points);  // every return kept
+  const auto sweep = a.flush();
+  ASSERT_TRUE(sweep);
+  int at_zero = 0;
+  for (const auto& q : sweep->points) {
+    EXPECT_GE(q.azimuth, 0.0f);
+    EXPECT_LT(q.azimuth, static_cast<float>(2 * M_PI));
+    at_zero += q.azimuth == 0.0f;
+  }
+  EXPECT_GT(at_zero, 0);  // the last firing's returns, at 0 degrees
+  // the next packet's positions past the wrap start a new sweep; no packet in between was lost
+  Payload next = s.packets[6].payload;
+  for (int b = 0; b < 12; ++b) {
+    const int step = 3 + 3 * (b / 2);
+    next[b * 100 + 2] = static_cast<std::uint8_t>(step & 0xFF), next[b * 100 + 3] = static_cast<std::uint8_t>(step >> 8);
+  }
+  SweepAssembler c(s.lasers);
+  ASSERT_TRUE(c.push(p.data(), p.size(), out));
+  out.clear();
+  ASSERT_TRUE(c.push(next.data(), next.size(), out));
+  EXPECT_EQ(out.size(), 1u);
+  EXPECT_EQ(c.stats().lost, 0);
+}
+
+// A packet rejected for its content took its slot in the stream: it is counted as rejected, not
+// also as lost.
+TEST(VelodynePacketTest, ARejectedPacketIsNotAlsoCountedAsLost) {
+  const Stream& s = stream();
+  SweepAssembler a(s.lasers);
+  std::vector<LidarSweep> out;
+  for (std::size_t i = 0; i < 20; ++i) {
+    Payload p = s.packets[i].payload;
+    if (i == 7) p[0] = 0x12;  // a bad block id
+    a.push(p.data(), p.size(), out);
+  }
+  EXPECT_EQ(a.stats().bad_block, 1);
+  EXPECT_EQ(a.stats().lost, 0);
+  // a packet that never came is lost
+  a.push(s.packets[22].payload.data(), velodyne::kPacketSize, out);
+  EXPECT_EQ(a.stats().lost, 2);
 }
 
 TEST(VelodynePacketTest, LostPacketsAreCountedAndLeaveHolesNotWrongSweeps) {
