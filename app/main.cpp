@@ -95,7 +95,7 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
                  ground_only ? "YAML file with pipeline settings (of its sections, voxel_map and ground apply here); "
                                "command-line options override it"
                              : "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
-                               "estimation, footprint, crown); command-line options override it");
+                               "estimation, footprint, crown, free_space); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
   cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
       ->capture_default_str();
@@ -134,6 +134,9 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_flag("--crowns,!--no-crowns", c.crown.enabled,
                "raise the ground under tree crowns measured in the images above sensed trunks (by their foliage "
                "colour, or against the sky with --set crown.cue=sky) (default: on)");
+  cmd.add_flag("--sky-ceiling,!--no-sky-ceiling", c.free_space.enabled,
+               "lower every recovered height to the lowest ray of a sky pixel over its cell: nothing stands higher "
+               "where the cameras saw sky (default: off)");
   cmd.add_option("--spread-distance", c.estimation.spread_distance,
                  "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();
@@ -215,6 +218,10 @@ void printScorecard(const nlohmann::json& r) {
   }
   if (h.contains("crown_ground_vertices")) {
     std::cout << "    ground vertices raised under tree crowns: " << h["crown_ground_vertices"].get<std::size_t>() << "\n";
+  if (h.contains("sky_ceiling")) {
+    std::cout << "    raised vertices lowered to the sky's ceiling: " << h["sky_ceiling"]["lowered_vertices"].get<int>()
+              << " (of " << h["sky_ceiling"]["vertices_with_ceiling"].get<std::size_t>() << " vertices with a ceiling)\n";
+  }
   }
   if (h.contains("object_tops")) {
     std::cout << "    object tops the camera saw, at their real height (10 %, at least 1 m) sensed -> recovered:";
@@ -242,7 +249,17 @@ void printScorecard(const nlohmann::json& r) {
     }
   }
   std::cout << "  boundary coverage: " << r["boundary_coverage_before"].get<double>() << " sensed only, "
-            << r["boundary_coverage"].get<double>() << " after recovery\n"
+            << r["boundary_coverage"].get<double>() << " after recovery";
+  if (r.contains("boundary_coverage_by_camera") && r["boundary_coverage_by_camera"].size() > 1) {
+    std::cout << " (";
+    const char* sep = "";
+    for (auto it = r["boundary_coverage_by_camera"].begin(); it != r["boundary_coverage_by_camera"].end(); ++it) {
+      std::cout << sep << it.key() << " " << it.value()["after"].get<double>();
+      sep = ", ";
+    }
+    std::cout << ")";
+  }
+  std::cout << "\n"
             << "  per frame: median " << r["timing"]["total"]["median_ms"].get<double>() << " ms, p95 "
             << r["timing"]["total"]["p95_ms"].get<double>() << " ms (sensing period 100 ms)\n";
 }
@@ -401,6 +418,7 @@ nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, c
 nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int frames, const sim::SimConfig& sim_cfg,
                            const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet,
                            const eval::EvaluationOptions& scoring, const LidarChoice* lidar = nullptr) {
+  sim::validate(sim_cfg);  // bad settings are refused before anything is written
   io::prepareOutputDir(out, force);
   scenes::SceneConfig scene_cfg;
   scene_cfg.type = type;
@@ -713,7 +731,20 @@ int main(int argc, char** argv) {
   kitti->add_option("--json", kitti_json, "also write the scores as JSON");
   addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings, true);
 
-  CLI11_PARSE(app, argc, argv);
+  // usage errors end as every bad input does: the prefix and exit code 2 (help and version: 0)
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "terrain: error: " << e.what() << "\n"
+              << "Run with --help for more information.\n";
+    return 2;
+  }
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
     if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg, rec_pcap);

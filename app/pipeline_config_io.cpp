@@ -91,6 +91,10 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"footprint.min_raised", integer(c.footprint.min_raised)},
       {"footprint.min_raised_share", num(c.footprint.min_raised_share)},
       {"crown.enabled", [&c](const YAML::Node& n) { c.crown.enabled = n.as<bool>(); }},
+      {"free_space.enabled", [&c](const YAML::Node& n) { c.free_space.enabled = n.as<bool>(); }},
+      {"free_space.min_distance", num(c.free_space.min_distance)},
+      {"free_space.max_distance", num(c.free_space.max_distance)},
+      {"free_space.margin", num(c.free_space.margin)},
       {"crown.cue",
        [&c](const YAML::Node& n) {
          if (!parseCrownCue(n.as<std::string>(), c.crown.cue))
@@ -185,6 +189,11 @@ void validate(const PipelineConfig& c) {
   require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
   require(c.crown.min_height_px >= 1, "crown.min_height_px", c.crown.min_height_px, ">= 1 px");
   require(c.crown.min_baseline >= 0, "crown.min_baseline", c.crown.min_baseline, ">= 0 m");
+  require(c.free_space.min_distance >= 0 && c.free_space.min_distance <= 100, "free_space.min_distance",
+          c.free_space.min_distance, "[0, 100] m");
+  require(c.free_space.max_distance >= c.free_space.min_distance && c.free_space.max_distance <= 500,
+          "free_space.max_distance", c.free_space.max_distance, "[free_space.min_distance, 500] m");
+  require(c.free_space.margin >= 0 && c.free_space.margin <= 10, "free_space.margin", c.free_space.margin, "[0, 10] m");
   require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre, "[0, 0.5]");
   require(c.estimation.max_estimates >= 1 && c.estimation.max_estimates <= 1000, "estimation.max_estimates",
           static_cast<double>(c.estimation.max_estimates), "[1, 1000]");
@@ -193,7 +202,7 @@ void validate(const PipelineConfig& c) {
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown");
+  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown, free_space");
 }
 
 void applyPipelineSetting(const std::string& key_value, PipelineConfig& c, const std::string& option) {
@@ -243,6 +252,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                 {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
                 {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline},
                 {"max_offcentre", c.crown.max_offcentre}};
+  j["free_space"] = {{"enabled", c.free_space.enabled}, {"min_distance", c.free_space.min_distance},
+                     {"max_distance", c.free_space.max_distance}, {"margin", c.free_space.margin}};
   return j.dump();
 }
 

@@ -147,7 +147,8 @@ void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::Ru
   p.put<std::uint64_t>(pipeline.mesh().vertices().size());
   for (const auto& m : pipeline.mesh().vertices()) {
     p.put<std::int32_t>(m.cell.x()), p.put<std::int32_t>(m.cell.y()), p.put(m.top_voxel);
-    p.put(m.sensed_height), p.put(m.recovered_height), p.put<std::uint8_t>(m.spread), p.put<std::uint8_t>(m.parallax);
+    p.put(m.sensed_height), p.put(m.recovered_height), p.put(m.ceiling), p.put<std::uint8_t>(m.spread),
+        p.put<std::uint8_t>(m.parallax);
     p.putAll(m.estimates);
     for (std::uint16_t n : m.outcomes) p.put(n);
   }
@@ -241,12 +242,14 @@ SavedRun readRunState(const fs::path& out) {
   In p(io::readFile(pipeline_file), pipeline_file.string());
   std::vector<Voxel> voxels(static_cast<std::size_t>(p.count("voxels", kVoxelBytes)));
   for (auto& v : voxels) v = getVoxel(p);
-  std::vector<MeshVertex> vertices(static_cast<std::size_t>(p.count("mesh vertices", 30 + 2 * kEstimateOutcomes)));
+  std::vector<MeshVertex> vertices(static_cast<std::size_t>(p.count("mesh vertices", 34 + 2 * kEstimateOutcomes)));
   for (auto& m : vertices) {
     const auto x = p.get<std::int32_t>("mesh vertex"), y = p.get<std::int32_t>("mesh vertex");
     m.cell = CellIndex(x, y);
     m.top_voxel = p.get<std::uint32_t>("mesh vertex");
     m.sensed_height = p.get<float>("mesh vertex"), m.recovered_height = p.get<float>("mesh vertex");
+    m.ceiling = p.get<float>("mesh vertex");
+    if (std::isnan(m.ceiling)) p.fail("a mesh vertex's ceiling is NaN");
     m.spread = p.get<std::uint8_t>("mesh vertex") != 0;
     m.parallax = p.get<std::uint8_t>("mesh vertex") != 0;
     m.estimates = p.getAll<HeightEstimate>("mesh vertex estimates");

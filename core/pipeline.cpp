@@ -37,6 +37,7 @@ Pipeline::Pipeline(const RigCalibration& calibration, const PipelineConfig& conf
       config_(config),
       poses_(calibration, config.pose),
       map_(config.voxel_map),
+      ceiling_(config.voxel_map.voxel_size),
       incremental_(config.ground) {}
 
 void Pipeline::warn(const std::string& message) {
@@ -109,6 +110,7 @@ void Pipeline::finish() {
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
   crowns_.apply(mesh_, map_, config_.crown);
+  if (config_.free_space.enabled) sky_lowered_ = ceiling_.apply(mesh_, map_);
   for (auto& r : records_) {
     const Pose pose = poses_.worldFromVehicle(r.time);
     r.position = pose.translation();
@@ -256,6 +258,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
     projected += stats.projected;
     if (owners) owners->refreshTops(mesh_);
     crowns_.measure(mesh_, map_, rgb, k, view.world_from_camera, config_.crown, config_.estimation, shared);
+    ceiling_.carve(rgb, k, view.world_from_camera, config_.free_space, config_.estimation);
     rec.estimation_ms += msSince(t);
   }
   if (!views.empty() && projected == 0 && !map_.voxels().empty()) warn(id + "no camera sees a non-ground vertex");

@@ -1,13 +1,14 @@
 #pragma once
 // The pipeline: pose -> voxel map -> terrain mesh -> ground segmentation -> 2D boundary detection
 // -> 3D boundary estimation (and crown samples), one sensor frame at a time; at finish() the whole-map
-// segmentation, footprint completion and crown completion. It reads only SensorFrame and the rig
+// segmentation, footprint completion, crown completion and the sky's ceiling. It reads only SensorFrame and the rig
 // calibration; it writes nothing and prints nothing: warnings and timings are kept for the caller.
 
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
 #include "core/crown_completion.hpp"
 #include "core/footprint_completion.hpp"
+#include "core/free_space.hpp"
 #include "core/ground_segmentation.hpp"
 #include "core/pose_estimation.hpp"
 #include "core/sensor_data.hpp"
@@ -28,6 +29,7 @@ struct PipelineConfig {
   BoundaryEstimationConfig estimation;
   FootprintConfig footprint;
   CrownConfig crown;
+  FreeSpaceConfig free_space;
   int segment_every = 1;  // run ground segmentation every this many frames (and at the end)
 };
 
@@ -62,6 +64,8 @@ class Pipeline {
   // what crown completion made of every trunk a frame looked at (by trunk key)
   std::vector<CrownRecord> crownRecords() const { return crowns_.records(); }
   const std::vector<FrameRecord>& records() const { return records_; }
+  // raised vertices the sky's ceiling lowered at finish() (0 after restore())
+  int skyLowered() const { return sky_lowered_; }
   const std::vector<std::string>& warnings() const { return warnings_; }
   const PoseEstimator& poses() const { return poses_; }
   const RigCalibration& calibration() const { return calibration_; }
@@ -95,6 +99,7 @@ class Pipeline {
   std::vector<Footprint> footprints_;        // from finish()
   std::vector<RoofCell> roof_cells_;
   CrownSampler crowns_;                      // crown samples, frame by frame
+  SkyCeiling ceiling_;                       // the sky's rays, frame by frame
   IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {
     SensorFrame frame;
@@ -106,6 +111,7 @@ class Pipeline {
   std::vector<CameraBoundaries> last_boundaries_;
   int last_boundary_frame_ = -1;
   int processed_ = 0;
+  int sky_lowered_ = 0;
   bool dirty_ = false;  // points added since the last segmentation
 };
 

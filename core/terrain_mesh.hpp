@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -46,6 +47,8 @@ struct MeshVertex {
   float sensed_height = 0;                // [m] height of the top voxel
   std::vector<HeightEstimate> estimates;  // from the frames that saw the top, oldest first
   float recovered_height = 0;             // [m] fused estimate, valid when estimated() or spread
+  // [m] the lowest sky ray over the cell (SkyCeiling): a raised vertex stands no higher; +inf: none
+  float ceiling = std::numeric_limits<float>::infinity();
   // the estimates change with the camera's distance: the top edge seen above the vertex lies
   // behind it (boundary estimation's parallax test), and they do not stand
   bool parallax = false;
@@ -61,7 +64,9 @@ struct MeshVertex {
   bool estimated() const { return !estimates.empty() && !parallax; }
   // raised by boundary estimation, from its own estimates or its object's
   bool raised() const { return estimated() || spread; }
-  float height() const { return raised() ? std::max(sensed_height, recovered_height) : sensed_height; }
+  float height() const {
+    return raised() ? std::max(sensed_height, std::min(recovered_height, ceiling)) : sensed_height;
+  }
 };
 
 // Triangles over vertices on a regular grid of cells: two per complete quad, one where a corner is

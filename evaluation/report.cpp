@@ -270,6 +270,8 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["after"] = errorJson(h.after);
   hr["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
   hr["raised_terrain_cells"] = h.raised_terrain_cells;
+  hr["raised_terrain_cells_by_step"] = {{"crown_completion", h.raised_terrain_ground_cells},
+                                        {"boundary_estimation", h.raised_terrain_cells - h.raised_terrain_ground_cells}};
   hr["raised_edge_cells"] = h.raised_edge_cells;
   for (const auto& [view, e] : h.by_view) {
     hr["by_camera_view"][view] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)},
@@ -382,6 +384,10 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
     parallax += m.parallax;
   }
   hr["crown_ground_vertices"] = under_crowns;
+  // raised vertices the sky's ceiling lowered (free space), and how many vertices have a ceiling
+  std::size_t with_ceiling = 0;
+  for (const auto& m : pipeline.mesh().vertices()) with_ceiling += std::isfinite(m.ceiling);
+  hr["sky_ceiling"] = {{"lowered_vertices", pipeline.skyLowered()}, {"vertices_with_ceiling", with_ceiling}};
   hr["parallax_vertices"] = parallax;
   json& list = hr["footprints"]["list"] = json::array();
   for (const auto& f : pipeline.footprints()) {

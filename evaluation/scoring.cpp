@@ -76,7 +76,10 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
     if (!t.object) {
       if (v.raised() && v.height() > t.top + 1.0) {
         if (objectNearby(world, x, y, 0.5)) ++out.raised_edge_cells;
-        else ++out.raised_terrain_cells;
+        else {
+          ++out.raised_terrain_cells;
+          out.raised_terrain_ground_cells += map.voxels()[v.top_voxel].label == VoxelLabel::Ground;
+        }
       }
       continue;
     }

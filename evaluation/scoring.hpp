@@ -59,6 +59,8 @@ struct HeightScores {
   // any object (no object surface within 0.5 m), and on an object's edge (a wall or crown within
   // 0.5 m: the cell took the object's points through a small pose or beam error)
   std::size_t raised_terrain_cells = 0;
+  // of those, the cells whose vertex the segmentation labelled ground (raised by crown completion)
+  std::size_t raised_terrain_ground_cells = 0;
   std::size_t raised_edge_cells = 0;
   std::map<std::string, ObjectTop> tops;  // object id -> its top, for the objects with cells
 };

@@ -5,6 +5,7 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace terrain {
 namespace {
@@ -36,6 +37,38 @@ TEST(ReconstructTest, ADamagedSweepLeavesTheOutputDirectoryAsItWasFound) {
       << io::readFile(log);
   EXPECT_TRUE(fs::exists(out / "report.json"));
   EXPECT_TRUE(fs::is_directory(out / "boundaries"));
+}
+
+// A dataset of format 1 (one camera: its calibration at the top of calibration.json, its images in
+// camera/ itself) still reconstructs, its images used: the same report as the format-2 recording it
+// was rewritten from.
+TEST(ReconstructTest, AFormatOneDatasetStillReconstructs) {
+  test::TempDir dir;
+  const fs::path ds = dir / "ds", out2 = dir / "out2", out1 = dir / "out1";
+  ASSERT_EQ(0, sh(kCli + " record --scene " + kScene + " --frames 4 --cameras forward --width 160 --height 120 --out " +
+                  ds.string() + " > /dev/null"));
+  ASSERT_EQ(0, sh(kCli + " reconstruct --input " + ds.string() + " --out " + out2.string() + " > /dev/null 2>&1"));
+  // rewrite it as format 1 wrote it
+  for (const auto& e : fs::directory_iterator(ds / "camera" / "front")) fs::rename(e.path(), ds / "camera" / e.path().filename());
+  fs::remove(ds / "camera" / "front");
+  auto cal = nlohmann::json::parse(io::readFile(ds / "calibration.json"));
+  cal["camera"] = cal["cameras"][0];
+  cal["vehicle_from_camera"] = cal["cameras"][0]["vehicle_from_camera"];
+  cal["camera"].erase("vehicle_from_camera"), cal["camera"].erase("name"), cal.erase("cameras");
+  io::writeFileAtomic(ds / "calibration.json", cal.dump(1), true);
+  auto manifest = nlohmann::json::parse(io::readFile(ds / "manifest.json"));
+  manifest["format"] = "terrain-dataset/1";
+  manifest.erase("cameras");
+  io::writeFileAtomic(ds / "manifest.json", manifest.dump(1), true);
+  ASSERT_EQ(0, sh(kCli + " reconstruct --input " + ds.string() + " --out " + out1.string() + " > /dev/null 2>&1"));
+  const auto a = nlohmann::json::parse(io::readFile(out2 / "report.json"));
+  const auto b = nlohmann::json::parse(io::readFile(out1 / "report.json"));
+  EXPECT_EQ(a["height_recovery"]["after"], b["height_recovery"]["after"]);
+  EXPECT_EQ(a["height_recovery"]["by_camera_view"], b["height_recovery"]["by_camera_view"]);
+  EXPECT_EQ(b["cameras"], nlohmann::json::array({"front"}));
+  // its images were used: vertices were coloured and no frame went without an image
+  EXPECT_TRUE(b["height_recovery"]["by_camera_view"].contains("in_camera_view"));
+  EXPECT_EQ(io::readFile(out1 / "warnings.json").find("no image"), std::string::npos);
 }
 
 }  // namespace
