@@ -53,13 +53,25 @@ std::string preScan(int argc, char** argv, const std::string& name) {
   return {};
 }
 
+// the most sweeps one command simulates or records: 100,000 sweeps are 2.8 hours at 10 Hz, and a
+// recording of them at 640 x 480 with four cameras some 400 GB
+constexpr int kMaxFrames = 100000;
+
+// a seed: a whole number from 0 (CLI11 reads "-1" into an unsigned seed as 2^64 - 1)
+const CLI::Validator kSeed(
+    [](std::string& s) {
+      const bool digits = !s.empty() && s.size() <= 19 && s.find_first_not_of("0123456789") == std::string::npos;
+      return digits ? std::string() : "a seed is a whole number from 0 to 10^19, not '" + s + "'";
+    },
+    "SEED");
+
 bool isSubcommand(int argc, char** argv, const char* name) { return argc > 1 && std::strcmp(argv[1], name) == 0; }
 
 // options that fill the simulation settings; defaults shown in --help
 void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, const std::string& flag) {
   cmd.add_option(flag, config_file, "YAML file with simulation settings (sections robot, lidar, camera, gps, gyro); "
                                     "command-line options override it");
-  cmd.add_option("--seed", c.seed, "noise seed")->capture_default_str();
+  cmd.add_option("--seed", c.seed, "noise seed (>= 0)")->capture_default_str()->check(kSeed);
   cmd.add_option("--threads", c.threads, "lidar worker threads, 0 = all cores (output does not depend on it)")->capture_default_str();
   cmd.add_option("--speed", c.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
   cmd.add_option("--mast-height", c.robot.mast_height, "lidar height above the ground [m]")->capture_default_str();
@@ -289,6 +301,23 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
                            const sim::World* world, const eval::EvaluationOptions& scoring, bool quiet = false) {
   Pipeline pipeline(source.calibration(), config);
   eval::RunTruth truth(config.voxel_map.voxel_size);
+  // boundary images go into out/boundaries. If the input fails before the last frame, the run
+  // removes that folder again (when it made it): out is left as it was found, and the same --out
+  // can be given once the input is mended.
+  const fs::path boundary_dir = out / "boundaries";
+  const bool had_boundary_dir = fs::exists(boundary_dir);
+  const auto dropBoundaryImages = [&] {
+    std::error_code ec;
+    if (!had_boundary_dir) fs::remove_all(boundary_dir, ec);
+  };
+  {
+    // made before the sensing starts: a folder that cannot be made ends the run with its reason
+    std::error_code ec;
+    fs::create_directories(boundary_dir, ec);
+    if (ec || !fs::is_directory(boundary_dir))
+      throw io::InputError(boundary_dir.string() + ": cannot make the folder for the boundary images (" +
+                           (ec ? ec.message() : std::string("a file of that name is in the way")) + ")");
+  }
   app::BoundedQueue<SensorFrame> queue(4);
   std::exception_ptr sensing_error;
   std::thread sensing([&] {
@@ -302,16 +331,6 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
     }
     queue.close();
   });
-  // boundary images go into out/boundaries. If the input fails before the last frame, the run
-  // removes that folder again (when it made it): out is left as it was found, and the same --out
-  // can be given once the input is mended.
-  const fs::path boundary_dir = out / "boundaries";
-  const bool had_boundary_dir = fs::exists(boundary_dir);
-  const auto dropBoundaryImages = [&] {
-    std::error_code ec;
-    if (!had_boundary_dir) fs::remove_all(boundary_dir, ec);
-  };
-  fs::create_directories(boundary_dir);
   app::Progress progress(quiet ? "" : "reconstruct", source.frameCount());
   int done = 0, last_written = -1;
   try {
@@ -590,7 +609,9 @@ int main(int argc, char** argv) {
   std::string types;
   for (const auto& t : scenes::sceneTypes()) types += (types.empty() ? "" : ", ") + t;
   gen->add_option("--type", scene_cfg.type, "terrain type: " + types)->capture_default_str()->check(CLI::IsMember(scenes::sceneTypes()));
-  gen->add_option("--seed", scene_cfg.seed, "random seed; the same type and seed give byte-identical files")->capture_default_str();
+  gen->add_option("--seed", scene_cfg.seed, "random seed (>= 0); the same type and seed give byte-identical files")
+      ->capture_default_str()
+      ->check(kSeed);
   gen->add_option("--extent", scene_cfg.extent, "half side of the square scene [m], 20-500")->capture_default_str();
   gen->add_option("--cell", scene_cfg.hfield_cell, "heightfield grid spacing [m], 0.1-5")->capture_default_str();
   gen->add_option("--out", scene_out, "output MJCF file")->required();
@@ -604,7 +625,9 @@ int main(int argc, char** argv) {
   int rec_frames = 60;
   bool rec_force = false;
   rec->add_option("--scene", rec_scene, "scene MJCF file (with its .truth.json sidecar)")->required();
-  rec->add_option("--frames", rec_frames, "number of lidar sweeps to record")->capture_default_str();
+  rec->add_option("--frames", rec_frames, "number of lidar sweeps to record, 1-" + std::to_string(kMaxFrames))
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxFrames));
   rec->add_option("--out", rec_out, "output dataset directory")->required();
   rec->add_flag("--force", rec_force, "write into an existing, non-empty directory");
   bool rec_pcap = false;
@@ -666,7 +689,9 @@ int main(int argc, char** argv) {
   double strm_speed = 1.0;
   auto* strm_src = strm->add_option("--pcap", strm_pcap, "capture file to replay (its timestamps set the pace)");
   strm->add_option("--scene", strm_scene, "or: scene MJCF file to simulate and send")->excludes(strm_src);
-  strm->add_option("--frames", strm_frames, "sweeps to simulate with --scene")->capture_default_str();
+  strm->add_option("--frames", strm_frames, "sweeps to simulate with --scene, 1-" + std::to_string(kMaxFrames))
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxFrames));
   strm->add_option("--sim-config", strm_sim_config, "YAML simulation settings for --scene (as for 'terrain record --config')");
   strm->add_option("--to", strm_to, "destination HOST:PORT")->capture_default_str();
   strm->add_option("--speed", strm_speed, "pace relative to the real sensor (2: twice as fast), in (0, 100]")->capture_default_str();
@@ -681,8 +706,12 @@ int main(int argc, char** argv) {
   sim::SimConfig run_sim;
   std::string sim_config_file = isSubcommand(argc, argv, "run") ? preScan(argc, argv, "--sim-config") : "";
   run->add_option("--scenario", run_scenario, "terrain type of the generated scene")->capture_default_str()->check(CLI::IsMember(scenes::sceneTypes()));
-  run->add_option("--seed", run_seed, "scene seed (the sensor noise seed is --noise-seed)")->capture_default_str();
-  run->add_option("--frames", run_frames, "lidar sweeps to simulate")->capture_default_str();
+  run->add_option("--seed", run_seed, "scene seed, >= 0 (the sensor noise seed is --noise-seed)")
+      ->capture_default_str()
+      ->check(kSeed);
+  run->add_option("--frames", run_frames, "lidar sweeps to simulate, 1-" + std::to_string(kMaxFrames))
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxFrames));
   run->add_option("--out", run_out, "output directory")->capture_default_str();
   run->add_flag("--force", run_force, "write into an existing, non-empty directory");
   addLidarOptions(*run, "the simulated rig");
@@ -697,7 +726,7 @@ int main(int argc, char** argv) {
   }
   addPipelineOptions(*recon, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
   addPipelineOptions(*run, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
-  run->add_option("--noise-seed", run_sim.seed, "sensor noise seed")->capture_default_str();
+  run->add_option("--noise-seed", run_sim.seed, "sensor noise seed (>= 0)")->capture_default_str()->check(kSeed);
   run->add_option("--sim-config", sim_config_file, "YAML file with simulation settings (as for 'terrain record --config')");
   run->add_option("--speed", run_sim.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
   run->add_option("--height-cap", run_sim.lidar.height_cap, "lidar returns higher than this above the sensor are dropped [m]")
