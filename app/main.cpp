@@ -531,7 +531,7 @@ long long sendPaced(rig::UdpSender& out, const std::vector<rig::velodyne::TimedP
 
 int stream(const fs::path& pcap_path, const fs::path& scene_path, int frames, const sim::SimConfig& config,
            const std::string& to, double speed) {
-  const rig::LidarEndpoint target = rig::LidarEndpoint::parse("udp:" + to);
+  const rig::LidarEndpoint target = rig::LidarEndpoint::parse("udp:" + to, "stream destination");
   if (!(speed > 0 && speed <= 100)) throw io::InputError("--speed " + std::to_string(speed) + " is out of range (allowed: (0, 100])");
   rig::UdpSender out(target.host, target.port);
   long long sent = 0, late = 0;
@@ -693,7 +693,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
   strm->add_option("--sim-config", strm_sim_config, "YAML simulation settings for --scene (as for 'terrain record --config')");
-  strm->add_option("--to", strm_to, "destination HOST:PORT")->capture_default_str();
+  strm->add_option("--to", strm_to, "destination HOST:PORT (HOST an IPv4 address or localhost)")->capture_default_str();
   strm->add_option("--speed", strm_speed, "pace relative to the real sensor (2: twice as fast), in (0, 100]")->capture_default_str();
 
   // terrain run

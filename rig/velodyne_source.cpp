@@ -17,12 +17,14 @@ namespace terrain::rig {
 
 namespace {
 
+// An IPv4 address in dotted form, or localhost (127.0.0.1); no name is looked up.
 sockaddr_in socketAddress(const std::string& host, std::uint16_t port, const std::string& what) {
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_port = htons(port);
-  if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1) {
-    throw io::InputError(what + ": '" + host + "' is not an IPv4 address");
+  const std::string address = host == "localhost" ? "127.0.0.1" : host;
+  if (inet_pton(AF_INET, address.c_str(), &a.sin_addr) != 1) {
+    throw io::InputError(what + ": '" + host + "' is not an IPv4 address (nor localhost)");
   }
   return a;
 }
@@ -31,7 +33,7 @@ std::string addressText(const std::string& host, std::uint16_t port) { return ho
 
 }  // namespace
 
-LidarEndpoint LidarEndpoint::parse(const std::string& text) {
+LidarEndpoint LidarEndpoint::parse(const std::string& text, const std::string& role) {
   LidarEndpoint e;
   if (text.rfind("pcap:", 0) == 0 && text.size() > 5) {
     e.kind = Kind::Pcap;
@@ -48,15 +50,15 @@ LidarEndpoint LidarEndpoint::parse(const std::string& text) {
       char* end = nullptr;
       const long p = std::strtol(port.c_str(), &end, 10);
       if (port.empty() || *end != '\0' || p < 0 || p > 65535) {
-        throw io::InputError("lidar source '" + text + "': port '" + port + "' is not a number in [0, 65535]");
+        throw io::InputError(role + " '" + text + "': port '" + port + "' is not a number in [0, 65535]");
       }
       e.port = static_cast<std::uint16_t>(p);
     }
     if (!rest.empty()) e.host = rest;
-    socketAddress(e.host, e.port, "lidar source '" + text + "'");  // checks the address
+    socketAddress(e.host, e.port, role + " '" + text + "'");  // checks the address
     return e;
   }
-  throw io::InputError("lidar source '" + text + "': expected pcap:FILE or udp:HOST:PORT (for example udp:0.0.0.0:2368)");
+  throw io::InputError(role + " '" + text + "': expected pcap:FILE or udp:HOST:PORT (for example udp:0.0.0.0:2368)");
 }
 
 std::string LidarEndpoint::describe() const {
@@ -71,15 +73,15 @@ UdpReceiver::UdpReceiver(const std::string& host, std::uint16_t port) {
   sockaddr_in a = socketAddress(host, port, where);
   fd_ = ::socket(AF_INET, SOCK_DGRAM, 0);
   if (fd_ < 0) throw io::InputError(where + ": cannot open a socket (" + std::strerror(errno) + ")");
-  const int one = 1;
-  ::setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  // no SO_REUSEADDR: a second receiver on the same port is refused, not handed half the packets
   // a deep receive buffer: a second of HDL-64E traffic is about 4 MB
   const int buffer = 16 << 20;
   ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
   if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
-    const std::string why = std::strerror(errno);
+    const int error = errno;
     ::close(fd_);
-    throw io::InputError(where + ": cannot bind (" + why + ")");
+    throw io::InputError(where + ": cannot bind (" + std::strerror(error) +
+                         (error == EADDRINUSE ? "; another program receives on that port" : "") + ")");
   }
   socklen_t len = sizeof a;
   ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);

@@ -25,8 +25,9 @@ struct LidarEndpoint {
   std::string host = "0.0.0.0";  // udp bind address
   std::uint16_t port = velodyne::kDataPort;
 
-  // Throws io::InputError naming the text if it is neither form.
-  static LidarEndpoint parse(const std::string& text);
+  // Throws io::InputError naming the text (as `role`: what the endpoint is for) if it is neither
+  // form. HOST is an IPv4 address in dotted form or localhost.
+  static LidarEndpoint parse(const std::string& text, const std::string& role = "lidar source");
   std::string describe() const;
 };
 
