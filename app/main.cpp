@@ -845,6 +845,30 @@ int main(int argc, char** argv) {
                     << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  " << j[m]["precision"].get<double>()
                     << "     " << j[m]["recall"].get<double>() << "\n";
         }
+        // where the configured solver calls ground wrongly
+        const auto& conf = j["confusion"];
+        std::vector<std::pair<std::uint64_t, std::string>> wrong;
+        for (auto it = conf["by_class"].begin(); it != conf["by_class"].end(); ++it) {
+          const std::string name = it.key();
+          if (name == "road" || name == "parking" || name == "sidewalk" || name == "other-ground" || name == "terrain" ||
+              name == "vegetation")
+            continue;
+          const auto n = it.value()["labelled_ground"].get<std::uint64_t>();
+          if (n > 0) wrong.emplace_back(n, name);
+        }
+        std::sort(wrong.rbegin(), wrong.rend());
+        std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::right << "false ground ("
+                  << conf["method"].get<std::string>() << ") by class:";
+        for (const auto& [n, name] : wrong) {
+          std::cout << " " << name << " " << n << "/" << conf["by_class"][name]["points"].get<std::uint64_t>();
+        }
+        std::cout << "\n" << std::left << std::setw(14) << scan_path.stem().string() << std::right
+                  << "false / missed ground by distance:";
+        for (auto it = conf["by_distance"].begin(); it != conf["by_distance"].end(); ++it) {
+          std::cout << " " << it.key() << " m " << it.value()["false_ground"].get<std::uint64_t>() << " / "
+                    << it.value()["missed_ground"].get<std::uint64_t>();
+        }
+        std::cout << "\n";
         all[scan_path.stem().string()] = j;
       }
       if (!kitti_json.empty()) io::writeFileAtomic(kitti_json, all.dump(1) + "\n", false);

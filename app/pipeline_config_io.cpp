@@ -37,6 +37,7 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"ground.bin_size", num(c.ground.bin_size)},
       {"ground.delta", num(c.ground.delta)},
       {"ground.range_margin", num(c.ground.range_margin)},
+      {"ground.stack_height", num(c.ground.stack_height)},
       {"ground.tile_size", num(c.ground.tile_size)},
       {"ground.tile_radius", integer(c.ground.tile_radius)},
       {"ground.histogram_stride", integer(c.ground.histogram_stride)},
@@ -127,6 +128,8 @@ void validate(const PipelineConfig& c) {
   require(c.ground.bin_size > 0 && c.ground.bin_size <= 5, "ground.bin_size", c.ground.bin_size, "(0, 5] m");
   require(c.ground.delta > 0 && c.ground.delta <= 10, "ground.delta", c.ground.delta, "(0, 10] m");
   require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin, "(0, 20] m");
+  require(c.ground.stack_height >= 0 && c.ground.stack_height <= 10, "ground.stack_height", c.ground.stack_height,
+          "0 (off) or (0, 10] m");
   require(c.ground.tile_size >= 1 && c.ground.tile_size <= 1000, "ground.tile_size", c.ground.tile_size, "[1, 1000] m");
   require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius, "[0, 10]");
   require(c.ground.histogram_stride >= 1 && c.ground.histogram_stride <= 8, "ground.histogram_stride",
@@ -219,6 +222,7 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
   j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
                  {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
                  {"bin_size", c.ground.bin_size}, {"delta", c.ground.delta}, {"range_margin", c.ground.range_margin},
+                 {"stack_height", c.ground.stack_height},
                  {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius},
                  {"histogram_stride", c.ground.histogram_stride}, {"alpha", c.ground.alpha},
                  {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations},

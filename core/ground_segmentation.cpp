@@ -969,6 +969,7 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
     const std::int32_t* const zs = layout.zs();
     const float* const heights = layout.heights();
     const double delta = cfg.delta, range_margin = cfg.range_margin, alpha = cfg.alpha;
+    const float stack_height = static_cast<float>(cfg.stack_height);
     const Plane plane = ws.planes[t];
     const auto& tile = layout.tiles()[t];
     layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
@@ -977,7 +978,17 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
       const bool on_edge = lx == 0 || ly == 0 || lx == k - 1 || ly == k - 1;
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];
-        const Unary u = unary(h - ground, delta, range_margin, alpha);
+        Unary u = unary(h - ground, delta, range_margin, alpha);
+        // the foot of something upright: an unbroken stack of the column's voxels (sorted
+        // upwards) rises from it
+        if (stack_height > 0) {
+          for (auto r = q + 1; r < e && zs[r] == zs[r - 1] + 1; ++r) {
+            if (heights[r] - h > stack_height) {
+              u = {false, static_cast<float>(2 * alpha)};
+              break;
+            }
+          }
+        }
         unary_ground[q] = u.ground, unary_nonground[q] = -u.ground;
         parity[q] = static_cast<std::uint8_t>((x + y + zs[q]) & 1);
         prev[3 * q] = prev[3 * q + 1] = prev[3 * q + 2] = GmrfProblem::kNone;

@@ -34,6 +34,15 @@ struct GroundSegmentationConfig {
   double bin_size = 0.1;      // [m] histogram bin width
   double delta = 0.3;         // [m] half-width of the ground band around h1 (rough class G1)
   double range_margin = 0.5;  // [m] half-width of R(ground) around h1
+  // A voxel at the foot of an unbroken stack of voxels (each directly above the one below) that
+  // reaches more than stack_height above it stands under something upright (a wall, a fence, a
+  // trunk, the side of a car): rough class non-ground, and its single-site term that of a voxel
+  // outside R(ground). Ground is one or two voxels thick in its column, and the ground under a car
+  // body, a crown or an overhang has empty voxels between them. 0: off (the paper's terms). On the
+  // two real KITTI scans ICM F1 0.964 -> 0.977 and 0.940 -> 0.967 (0.2 m: 0.978, 0.971); 0.4 rather
+  // than 0.2 because a map of several sweeps with pose error has thicker ground columns (8-frame
+  // slope seed 1, 6.6 deg of pitch error: 0.981 -> 0.940 at 0.2, 0.985 at 0.4).
+  double stack_height = 0.4;  // [m]
   double tile_size = 6.0;     // [m] local histogram tile edge
   int tile_radius = 1;        // tiles on each side whose voxels join a tile's histogram
   // [columns] of a tile's neighbours, its histogram takes the columns whose grid x and y are

@@ -7,6 +7,8 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <map>
+#include <string>
 
 namespace terrain::eval {
 
@@ -37,6 +39,38 @@ std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const V
   return out;
 }
 
+json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
+                    const std::vector<std::uint8_t>& ground) {
+  struct Count {
+    std::uint64_t points = 0, ground = 0;
+  };
+  std::map<std::string, Count> by_class;
+  static const char* const kBands[] = {"0-10", "10-20", "20-30", "30-50", "50+"};
+  struct Band {
+    std::uint64_t points = 0, false_ground = 0, missed_ground = 0;
+  };
+  Band bands[5];
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    Count& c = by_class[rig::kittiClassName(labels[i])];
+    ++c.points;
+    c.ground += ground[i] != 0;
+    if (rig::isKittiIgnored(labels[i])) continue;
+    const double d = points[i].head<2>().norm();
+    Band& b = bands[d < 10 ? 0 : d < 20 ? 1 : d < 30 ? 2 : d < 50 ? 3 : 4];
+    ++b.points;
+    const bool truth = rig::isKittiGround(labels[i]);
+    b.false_ground += !truth && ground[i];
+    b.missed_ground += truth && !ground[i];
+  }
+  json j;
+  for (const auto& [name, c] : by_class) j["by_class"][name] = {{"points", c.points}, {"labelled_ground", c.ground}};
+  for (int k = 0; k < 5; ++k) {
+    j["by_distance"][kBands[k]] = {{"points", bands[k].points}, {"false_ground", bands[k].false_ground},
+                                   {"missed_ground", bands[k].missed_ground}};
+  }
+  return j;
+}
+
 json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                     const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground, double sensor_height) {
   std::vector<bool> truth(points.size()), skip(points.size());
@@ -58,6 +92,9 @@ json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::ui
   g.solver = GroundSegmentationConfig::Solver::MinCut;
   j["gmrf_mincut"] = score(segmentScan(points, voxels, g, &ms));
   j["gmrf_mincut"]["time_ms"] = ms;
+  // where the configured solver errs
+  j["confusion"] = kittiConfusion(points, labels, segmentScan(points, voxels, ground));
+  j["confusion"]["method"] = ground.solver == GroundSegmentationConfig::Solver::Icm ? "gmrf_icm" : "gmrf_mincut";
   // the histogram alone: rough labels of the same map
   {
     VoxelMap map(voxels);

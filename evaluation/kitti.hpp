@@ -13,7 +13,16 @@
 
 namespace terrain::eval {
 
-// sensor_height: the lidar's height above the road [m] (KITTI: 1.73), for the fixed band.
+// Where a segmentation of a scan errs: per SemanticKITTI class the points and those labelled
+// ground (for a non-ground class, false ground; for a ground class, found ground), and per band of
+// horizontal distance from the sensor (0-10, 10-20, 20-30, 30-50, 50+ m) the scored points, false
+// ground and missed ground. Vegetation is counted by class but not in the bands.
+nlohmann::json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
+                              const std::vector<std::uint8_t>& ground);
+
+// sensor_height: the lidar's height above the road [m] (KITTI: 1.73), for the fixed band. The
+// report holds every method's scores and, for the configured solver, the confusion
+// (kittiConfusion) under "confusion".
 nlohmann::json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                               const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground,
                               double sensor_height);

@@ -39,6 +39,7 @@ TEST(GroundSegmentationTest, GmrfCleansANoisyLabelling) {
   VoxelMap map = groundWithBox();
   GroundSegmentationConfig cfg;
   cfg.histogram = GroundSegmentationConfig::Histogram::Global;
+  cfg.stack_height = 0;  // the paper's terms: the walls' feet are ground here
   const SegmentationResult clean = segmentGround(map, cfg);
   // truth: ground voxels are the ones at z index 0; the lowest wall voxel (0.25 m above the
   // ground, inside the +-delta band) is ambiguous and not scored
@@ -98,6 +99,61 @@ GmrfProblem randomProblem(int n, std::uint64_t seed) {
   for (int i = 0; i + 1 < n; ++i) p.link(i, 0, i + 1, rng.uniform(0.1, 1.5));
   for (int i = 0; i + 3 < n; i += 2) p.link(i, 1, i + 3, rng.uniform(0.1, 1.5));
   return p;
+}
+
+// The foot of something upright: on flat ground, a box's walls stand as unbroken stacks of voxels
+// from the ground voxel of their columns up to 1.9 m. With the stack test (ground.stack_height) the
+// feet of the walls, in the ground band, and the lowest wall voxels, within delta of the ground,
+// are non-ground; every other ground voxel stays ground. Without it, the feet are ground.
+TEST(GroundSegmentationTest, TheFootOfAWallIsNotGround) {
+  VoxelMap map = groundWithBox();
+  GroundSegmentationConfig cfg;
+  ASSERT_GT(cfg.stack_height, 0);  // on by default
+  const SegmentationResult with = segmentGround(map, cfg);
+  cfg.stack_height = 0;
+  const SegmentationResult without = segmentGround(map, cfg);
+  std::size_t feet = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const VoxelIndex& v = map.voxels()[i].index;
+    const bool box = v.x() >= 0 && v.x() < 10 && v.y() >= 0 && v.y() < 10;
+    const bool wall = box && (v.x() == 0 || v.x() == 9 || v.y() == 0 || v.y() == 9);
+    if (v.z() == 0 && wall) {
+      ++feet;
+      EXPECT_EQ(with.rough[i], 0) << v.transpose();
+      EXPECT_EQ(with.refined[i], 0) << v.transpose();
+      EXPECT_EQ(without.rough[i], 1) << v.transpose();
+    } else if (v.z() == 0) {
+      EXPECT_EQ(with.refined[i], 1) << v.transpose();
+    } else {
+      EXPECT_EQ(with.refined[i], 0) << v.transpose();
+    }
+  }
+  EXPECT_EQ(feet, 36u);
+}
+
+// A car body over the road: the road voxels under its edge, with an empty voxel between them and
+// the body, stay ground; the body's lowest voxels (within delta of the road) do not.
+TEST(GroundSegmentationTest, GroundUnderAnOverhangStaysGround) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, 0.05);
+      // a body from 0.4 m to 1.4 m over a 2 x 4 m patch
+      const bool body = x >= 0 && x < 10 && y >= 0 && y < 20;
+      for (int z = 2; body && z < 7; ++z) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, z * 0.2 + 0.1);
+    }
+  }
+  map.insert(pts, 0);
+  const SegmentationResult s = segmentGround(map, GroundSegmentationConfig{});
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const VoxelIndex& v = map.voxels()[i].index;
+    if (v.z() == 0) {
+      EXPECT_EQ(s.rough[i], 1) << v.transpose();
+    } else if (v.z() == 2) {
+      EXPECT_EQ(s.rough[i], 0) << v.transpose();  // 0.5 m up: its stack rises to 1.3 m
+    }
+  }
 }
 
 TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {

@@ -7,13 +7,18 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <string>
+
 namespace terrain::eval {
 namespace {
 
 const std::filesystem::path kData = std::filesystem::path(TERRAIN_SOURCE_DIR) / "tests" / "data" / "semantickitti";
 
-// the paper's method on the two real HDL-64E scans: a guard on real data
+// the method on the two real HDL-64E scans: a guard on real data, at today's F1 less 0.002
+// (2026-12-03: 0.977 and 0.967 with the stack test; 0.964 and 0.940 without it)
 TEST(KittiTest, GroundSegmentationOfRealScans) {
+  const std::map<std::string, double> floor = {{"000000", 0.975}, {"000020", 0.965}};
   for (const char* name : {"000000", "000020"}) {
     const rig::KittiScan scan = rig::readKittiScan(kData / (std::string(name) + ".bin"));
     const auto labels = rig::readSemanticKittiLabels(kData / (std::string(name) + ".label"), scan.points.size());
@@ -22,9 +27,30 @@ TEST(KittiTest, GroundSegmentationOfRealScans) {
     std::vector<bool> p(pred.begin(), pred.end()), truth, skip;
     for (auto l : labels) truth.push_back(rig::isKittiGround(l)), skip.push_back(rig::isKittiIgnored(l));
     const BinaryScores s = binaryScores(p, truth, skip);
-    EXPECT_GT(s.f1, 0.92) << name;
+    EXPECT_GE(s.f1, floor.at(name)) << name;
     EXPECT_GT(s.recall, 0.95) << name;
   }
+}
+
+// The confusion by class and distance on a hand-made labelled cloud: two road points (one called
+// ground, one not), a car point called ground, a building point called non-ground, vegetation
+// called ground (counted by class, left out of the bands).
+TEST(KittiTest, ConfusionCountsByClassAndDistance) {
+  const std::vector<Point3> pts = {{5, 0, -1.7}, {15, 0, -1.7}, {0, 25, -1.5}, {40, 0, 0}, {3, 4, -1}};
+  const std::vector<std::uint16_t> labels = {8, 8, 0, 12, 14};  // road, road, car, building, vegetation
+  const std::vector<std::uint8_t> ground = {1, 0, 1, 0, 1};
+  const auto j = kittiConfusion(pts, labels, ground);
+  EXPECT_EQ(j["by_class"]["road"]["points"], 2);
+  EXPECT_EQ(j["by_class"]["road"]["labelled_ground"], 1);
+  EXPECT_EQ(j["by_class"]["car"]["labelled_ground"], 1);
+  EXPECT_EQ(j["by_class"]["building"]["labelled_ground"], 0);
+  EXPECT_EQ(j["by_class"]["vegetation"]["labelled_ground"], 1);
+  EXPECT_EQ(j["by_distance"]["0-10"]["points"], 1);  // the vegetation point (5 m) is not scored
+  EXPECT_EQ(j["by_distance"]["10-20"]["missed_ground"], 1);
+  EXPECT_EQ(j["by_distance"]["20-30"]["false_ground"], 1);
+  EXPECT_EQ(j["by_distance"]["30-50"]["points"], 1);
+  EXPECT_EQ(j["by_distance"]["30-50"]["false_ground"], 0);
+  EXPECT_EQ(j["by_distance"]["50+"]["points"], 0);
 }
 
 TEST(KittiTest, MalformedFilesAreRefused) {
