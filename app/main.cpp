@@ -67,6 +67,15 @@ const CLI::Validator kSeed(
 
 bool isSubcommand(int argc, char** argv, const char* name) { return argc > 1 && std::strcmp(argv[1], name) == 0; }
 
+// the named camera rig, for the commands that simulate
+void addCameraRigOption(CLI::App& cmd, std::string& rig) {
+  cmd.add_option("--cameras", rig,
+                 std::string("camera rig (") + sim::kCameraRigs +
+                     "): surround has a front, left, rear and right camera 90 deg apart that see the whole horizon; "
+                     "forward is the paper's single forward camera. A sim config's 'cameras' list replaces it")
+      ->capture_default_str();
+}
+
 // options that fill the simulation settings; defaults shown in --help
 void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, const std::string& flag) {
   cmd.add_option(flag, config_file, "YAML file with simulation settings (sections robot, lidar, camera, gps, gyro); "
@@ -84,11 +93,7 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
   cmd.add_option("--dropout", c.lidar.dropout, "probability a return is lost")->capture_default_str();
   cmd.add_option("--height-cap", c.lidar.height_cap, "returns higher than this above the sensor are dropped [m]")->capture_default_str();
   cmd.add_flag("!--no-camera", c.camera.enabled, "do not render camera frames");
-  cmd.add_option("--cameras", c.camera.rig,
-                 std::string("camera rig (") + sim::kCameraRigs +
-                     "): surround has a front, left, rear and right camera 90 deg apart that see the whole horizon; "
-                     "forward is the paper's single forward camera. A sim config's 'cameras' list replaces it")
-      ->capture_default_str();
+  addCameraRigOption(cmd, c.camera.rig);
   cmd.add_option("--width", c.camera.width, "image width [px] of every camera (default: each camera's own, 640)");
   cmd.add_option("--height", c.camera.height, "image height [px] of every camera (default: each camera's own, 480)");
   cmd.add_option("--fovy", c.camera.fovy_deg, "vertical field of view [deg] of every camera (default: each camera's own, 75)");
@@ -732,11 +737,7 @@ int main(int argc, char** argv) {
   run->add_option("--height-cap", run_sim.lidar.height_cap, "lidar returns higher than this above the sensor are dropped [m]")
       ->capture_default_str();
   run->add_option("--threads", run_sim.threads, "lidar simulation threads, 0 = all cores")->capture_default_str();
-  run->add_option("--cameras", run_sim.camera.rig,
-                  std::string("camera rig (") + sim::kCameraRigs +
-                      "): surround sees the whole horizon with four cameras; forward is the paper's single forward "
-                      "camera")
-      ->capture_default_str();
+  addCameraRigOption(*run, run_sim.camera.rig);
 
   // terrain regress
   CLI::App* reg = app.add_subcommand("regress", "run a suite of scenarios and compare every metric with its baseline");

@@ -73,9 +73,7 @@ void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibra
           interpolatePose(frame.truth->poses, image.time) * calibration.cameras[image.camera].vehicle_from_camera;
       truth.cameras.push_back(std::move(c));
     }
-    std::set<int> kept_frames;
-    for (const auto& c : truth.cameras) kept_frames.insert(c.frame);
-    if (kept_frames.size() > kMaxCameraFrames) {
+    if (keptFrameCount(truth) > kMaxCameraFrames) {
       // keep the frames on the doubled stride
       truth.camera_stride *= 2;
       std::vector<CameraTruthFrame> kept;
@@ -85,6 +83,12 @@ void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibra
       truth.cameras = std::move(kept);
     }
   }
+}
+
+std::size_t keptFrameCount(const RunTruth& truth) {
+  std::set<int> frames;
+  for (const auto& c : truth.cameras) frames.insert(c.frame);
+  return frames.size();
 }
 
 BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double cell,
@@ -364,9 +368,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
                      {{"objects", w.seen}, {"at_height_before", w.before}, {"at_height_after", w.after},
                       {"too_high_before", w.high_before}, {"too_high_after", w.high_after}}}};
     }
-    std::set<int> kept;
-    for (const auto& c : truth.cameras) kept.insert(c.frame);
-    tops["frames"] = kept.size();
+    tops["frames"] = keptFrameCount(truth);
   }
   // roofs of completed building footprints
   const RoofScores roof = scoreRoofCells(pipeline.roofCells(), map.voxelSize(), world);

@@ -38,6 +38,9 @@ struct RunTruth {
 constexpr std::size_t kMaxCameraFrames = 64;
 void addFrameTruth(RunTruth& truth, const rig::RigFrame& frame, const RigCalibration& calibration, int camera_every);
 
+// How many frames the kept camera images come from (a frame's cameras count once).
+std::size_t keptFrameCount(const RunTruth& truth);
+
 struct BoundaryCoverage {
   double before = 0, after = 0;  // share of true top-boundary pixels reproduced
   std::size_t boundary_pixels = 0;

@@ -56,19 +56,26 @@ inline const std::string kCli = TERRAIN_CLI;
 inline const std::string kUrbanScene = std::string(TERRAIN_SOURCE_DIR) + "/scenes/library/urban_1.xml";
 inline int sh(const std::string& command) { return std::system(command.c_str()); }
 
-// A flat plane named "ground", a wall (class building) whose near face is at x = wall_x, and
-// the robot body with its camera, as generated scenes have them.
-inline std::string wallScene(double wall_x) {
-  const double cx = wall_x + 0.5;
+// A flat plane named "ground", one box geom (class building) named `name` with its centre and half
+// sizes [m], and the robot body with its camera, as generated scenes have them; with sky, a
+// gradient skybox of daylight blue (the sky test of boundary estimation passes on it).
+inline std::string boxScene(const std::string& name, const Eigen::Vector3d& centre, const Eigen::Vector3d& half,
+                            bool sky = false) {
+  const auto v3 = [](const Eigen::Vector3d& v) {
+    return std::to_string(v.x()) + " " + std::to_string(v.y()) + " " + std::to_string(v.z());
+  };
   return R"(<mujoco>
   <statistic extent="100" center="0 0 0"/>
   <visual><global offwidth="160" offheight="120"/><quality offsamples="0"/><map znear="0.002" zfar="3"/></visual>
-  <default><geom contype="0" conaffinity="0"/></default>
+)" + std::string(sky ? R"(  <asset><texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.65 0.95" rgb2="0.7 0.8 1" width="64" height="64"/></asset>
+)"
+                     : "") +
+         R"(  <default><geom contype="0" conaffinity="0"/></default>
   <worldbody>
     <light directional="true" pos="0 0 50" dir="0 0 -1"/>
     <geom name="ground" type="plane" size="60 60 1" rgba="0.3 0.5 0.3 1"/>
-    <geom name="wall" type="box" pos=")" +
-         std::to_string(cx) + R"( 0 10" size="0.5 40 10" rgba="0.7 0.7 0.7 1" group="1"/>
+    <geom name=")" + name + R"(" type="box" pos=")" + v3(centre) + R"(" size=")" + v3(half) +
+         R"(" rgba="0.7 0.7 0.7 1" group="1"/>
     <body name="robot" mocap="true">
       <geom name="robot_chassis" type="box" size="0.5 0.35 0.2" pos="0 0 0.35" group="3"/>
       <geom name="robot_mast" type="cylinder" size="0.04 0.8" pos="0 0 1" group="3"/>
@@ -78,21 +85,36 @@ inline std::string wallScene(double wall_x) {
 </mujoco>)";
 }
 
-inline scenes::SceneTruth wallTruth(double wall_x) {
+// The truth of boxScene: the box a building standing on z = 0 up to top_height, the robot driving
+// the given path.
+inline scenes::SceneTruth boxTruth(const std::string& name, const Eigen::Vector3d& centre, const Eigen::Vector3d& half,
+                                   std::vector<Eigen::Vector2d> path) {
   scenes::SceneTruth t;
   t.type = "test";
   t.extent = 60;
   t.terrain.kind = "plane";
-  scenes::ObjectTruth wall;
-  wall.id = "wall";
-  wall.object_class = scenes::GeomClass::Building;
-  wall.geoms = {"wall"};
-  wall.footprint = {{wall_x, -40}, {wall_x + 1, -40}, {wall_x + 1, 40}, {wall_x, 40}};
-  wall.top_height = 20;
-  t.objects.push_back(wall);
-  t.path = {{0, 0}, {1, 0}};
+  scenes::ObjectTruth box;
+  box.id = name;
+  box.object_class = scenes::GeomClass::Building;
+  box.geoms = {name};
+  const double x0 = centre.x() - half.x(), x1 = centre.x() + half.x(), y0 = centre.y() - half.y(),
+               y1 = centre.y() + half.y();
+  box.footprint = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+  box.top_height = centre.z() + half.z();
+  t.objects.push_back(box);
+  t.path = std::move(path);
   t.origin = {37.5585, 126.999, 60.0};
   return t;
+}
+
+// A 20 m wall 1 m thick and 80 m long whose near face is at x = wall_x, the robot at the origin
+// facing it.
+inline std::string wallScene(double wall_x) {
+  return boxScene("wall", {wall_x + 0.5, 0, 10}, {0.5, 40, 10});
+}
+
+inline scenes::SceneTruth wallTruth(double wall_x) {
+  return boxTruth("wall", {wall_x + 0.5, 0, 10}, {0.5, 40, 10}, {{0, 0}, {1, 0}});
 }
 
 inline std::shared_ptr<sim::World> wallWorld(double wall_x) {

@@ -98,45 +98,12 @@ TEST(PipelineTest, FullRunBringsObjectHeightsCloserToTheTruth) {
 // surround rig sees it (the side cameras' views end 45.6 degrees either side of their axes). Its
 // top, far above the lidar's cap, is recovered with the surround rig and not with the paper's
 // forward camera.
-std::string blockBehindScene() {
-  return R"(<mujoco>
-  <statistic extent="100" center="0 0 0"/>
-  <visual><global offwidth="320" offheight="240"/><quality offsamples="0"/><map znear="0.002" zfar="3"/></visual>
-  <asset><texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.65 0.95" rgb2="0.7 0.8 1" width="64" height="64"/></asset>
-  <default><geom contype="0" conaffinity="0"/></default>
-  <worldbody>
-    <light directional="true" pos="0 0 50" dir="0 0 -1"/>
-    <geom name="ground" type="plane" size="60 60 1" rgba="0.45 0.4 0.3 1"/>
-    <geom name="block" type="box" pos="-17 0 10" size="2 5 10" rgba="0.6 0.45 0.35 1" group="1"/>
-    <body name="robot" mocap="true">
-      <geom name="robot_chassis" type="box" size="0.5 0.35 0.2" pos="0 0 0.35" group="3"/>
-      <geom name="robot_mast" type="cylinder" size="0.04 0.8" pos="0 0 1" group="3"/>
-      <camera name="robot_camera" pos="0.1 0 1.6" xyaxes="0 -1 0 0 0 1" fovy="60"/>
-    </body>
-  </worldbody>
-</mujoco>)";
-}
-
-scenes::SceneTruth blockBehindTruth() {
-  scenes::SceneTruth t;
-  t.type = "test";
-  t.extent = 60;
-  t.terrain.kind = "plane";
-  scenes::ObjectTruth block;
-  block.id = "block";
-  block.object_class = scenes::GeomClass::Building;
-  block.geoms = {"block"};
-  block.footprint = {{-19, -5}, {-15, -5}, {-15, 5}, {-19, 5}};
-  block.top_height = 20;
-  t.objects.push_back(block);
-  t.path = {{0, 0}, {12, 0}};
-  t.origin = {37.5585, 126.999, 60.0};
-  return t;
-}
+const Eigen::Vector3d kBlockCentre(-17, 0, 10), kBlockHalf(2, 5, 10);
 
 // the median height of the mesh vertices on the block's near face (x in [-15.4, -15])
 double blockFaceHeight(const std::string& rig) {
-  auto world = std::make_shared<sim::World>(blockBehindScene(), blockBehindTruth());
+  auto world = std::make_shared<sim::World>(test::boxScene("block", kBlockCentre, kBlockHalf, true),
+                                            test::boxTruth("block", kBlockCentre, kBlockHalf, {{0, 0}, {12, 0}}));
   sim::SimConfig cfg;
   cfg.camera.rig = rig;
   cfg.camera.width = 320, cfg.camera.height = 240;
