@@ -5,8 +5,10 @@
 //   run               generate a scene, simulate and reconstruct in one go
 //   stream            send a capture or a simulated run as HDL-64E packets over UDP
 //   evaluate          score a finished run again from what it kept (OUT/state/)
+//   lidar             a real Velodyne capture alone: inspect, convert (app/lidar_commands.hpp)
 #include "app/bounded_queue.hpp"
 #include "app/html_report.hpp"
+#include "app/lidar_commands.hpp"
 #include "app/outputs.hpp"
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
@@ -366,6 +368,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
     throw;
   }
   sensing.join();
+  progress.finish();
   if (sensing_error) {
     dropBoundaryImages();
     std::rethrow_exception(sensing_error);
@@ -412,30 +415,119 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
 }
 
 // generate a scenario's scene into out/scene, simulate and reconstruct it into out
+rig::velodyne::Model modelForLasers(const rig::VelodyneLidar& lidar) {
+  return rig::velodyne::modelForLasers(lidar.calibration().laserCount(), lidar.calibration().source);
+}
+
 // where the lidar comes from instead of the simulated rig or the dataset (--lidar, --calibration)
 struct LidarChoice {
   std::string endpoint;  // pcap:FILE or udp:HOST:PORT; empty: no replacement
-  fs::path calibration;  // empty: the other source's laser table
+  fs::path calibration;  // empty: the other source's laser table, or the one shipped for the capture's model
+  std::string time_base = "auto";
+  bool strict = false;   // a cut-off capture is an error
+  double mast_height = 1.8;  // [m] a capture reconstructed alone: lidar above the ground
   rig::VelodyneOptions options;
 };
+
+// the lidar's counters and warnings beside the run's own, in report.json and warnings.json
+void addLidarToOutputs(const fs::path& out, nlohmann::json& report, const rig::VelodyneLidar& lidar,
+                       const std::string& cut_off, const std::vector<std::string>& notes) {
+  rig::CaptureScan counters;
+  counters.decode = lidar.stats();
+  counters.position = lidar.positionStats();
+  counters.read = lidar.captureStats();
+  counters.model = lidar.stats().accepted > 0 ? std::optional(modelForLasers(lidar)) : std::nullopt;
+  counters.calibration = lidar.calibration().source;
+  nlohmann::json j = app::captureJson(counters);
+  for (const char* k : {"sweeps", "gps_fixes", "warnings", "error", "first_firing_s", "last_firing_s", "duration_s",
+                        "rotation_hz", "return_mode_packets", "time_base_s", "time_base_source", "file"})
+    j.erase(k);
+  std::vector<std::string> warnings = notes;
+  if (!cut_off.empty()) warnings.push_back("lidar capture cut off (" + cut_off + "); everything before was decoded");
+  const auto& d = lidar.stats();
+  if (d.lost > 0) warnings.push_back("lidar: " + std::to_string(d.lost) + " data packets lost (gaps in the timestamps)");
+  if (d.rejected() > 0) warnings.push_back("lidar: " + std::to_string(d.rejected()) + " data packets rejected: " + d.summary());
+  j["source"] = lidar.summary();
+  report["lidar"] = j;
+  nlohmann::json w = nlohmann::json::parse(io::readFile(out / "warnings.json"));
+  for (const auto& m : warnings) {
+    w.push_back(m);
+    std::cerr << "terrain: warning: " << m << "\n";
+  }
+  report["lidar_warnings"] = warnings;
+  io::writeFileAtomic(out / "warnings.json", w.dump(1) + "\n", true);
+  io::writeFileAtomic(out / "report.json", report.dump(1) + "\n", true);
+}
 
 // the pipeline over `others` with its lidar replaced by Velodyne packets
 nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, const LidarChoice& lidar_choice,
                                     const PipelineConfig& pipe_cfg, const fs::path& out, const sim::World* world,
                                     const eval::EvaluationOptions& scoring) {
   const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
-  rig::LaserCalibration lasers =
-      lidar_choice.calibration.empty() ? others->lasers() : rig::loadLaserCalibration(lidar_choice.calibration);
-  auto lidar = std::make_unique<rig::VelodyneLidar>(endpoint, std::move(lasers), lidar_choice.options);
+  rig::VelodyneOptions options = lidar_choice.options;
+  // beside a dataset or a simulation the packets keep the other sensors' clock unless told otherwise
+  options.decoder.time_base = app::parseTimeBase(lidar_choice.time_base, "--lidar-time-base").value_or(0.0);
+  rig::LaserCalibration lasers = others->lasers();
+  std::string cut_off;
+  if (endpoint.kind == rig::LidarEndpoint::Kind::Pcap) {
+    // a capture shows its model: its table is the given one, the other source's if it fits, else the shipped one
+    rig::CaptureOptions capture;
+    capture.calibration = lidar_choice.calibration;
+    capture.time_base = options.decoder.time_base;
+    const rig::CaptureSetup setup = rig::setupCapture(endpoint.path, capture);
+    if (lidar_choice.strict) app::refuseCutOff(endpoint.path, setup.cut_off);
+    cut_off = setup.cut_off;
+    if (!lidar_choice.calibration.empty() || lasers.laserCount() != setup.lasers.laserCount()) lasers = setup.lasers;
+  } else if (!lidar_choice.calibration.empty()) {
+    lasers = rig::loadLaserCalibration(lidar_choice.calibration);
+  }
+  auto lidar = std::make_unique<rig::VelodyneLidar>(endpoint, std::move(lasers), options);
   if (endpoint.kind == rig::LidarEndpoint::Kind::Udp) {
     std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe() << "\n";
   }
   rig::LidarSwapSource source(std::move(others), std::move(lidar));
   nlohmann::json report = reconstruct(source, pipe_cfg, out, world, scoring);
-  std::cout << "lidar " << source.lidar().summary() << "\n";
+  std::vector<std::string> notes;
   if (source.pointsWithoutTruth() > 0) {
-    std::cout << "  " << source.pointsWithoutTruth() << " decoded points had no partner in the other source's truth (not scored)\n";
+    notes.push_back(std::to_string(source.pointsWithoutTruth()) +
+                    " decoded points had no partner in the other source's truth (not scored)");
   }
+  addLidarToOutputs(out, report, source.lidar(), cut_off, notes);
+  std::cout << "lidar " << source.lidar().summary() << "\n";
+  return report;
+}
+
+// a real capture alone: lidar and GPS from its packets, no camera, no gyro, nothing to score
+nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const PipelineConfig& pipe_cfg, const fs::path& out,
+                                  bool force, const eval::EvaluationOptions& scoring) {
+  const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
+  if (endpoint.kind != rig::LidarEndpoint::Kind::Pcap) {
+    throw io::InputError("--lidar " + lidar_choice.endpoint + " without --input: a live sensor needs the other sensors "
+                         "from a dataset (--input); a capture (pcap:FILE) can be reconstructed alone");
+  }
+  if (!(lidar_choice.mast_height > 0 && lidar_choice.mast_height < 10)) {
+    throw io::InputError("--mast-height " + std::to_string(lidar_choice.mast_height) + ": expected (0, 10) m");
+  }
+  rig::CaptureOptions capture;
+  capture.calibration = lidar_choice.calibration;
+  capture.time_base = app::parseTimeBase(lidar_choice.time_base, "--lidar-time-base");
+  capture.lidar = lidar_choice.options;
+  rig::CaptureSource source(endpoint.path, capture, lidar_choice.mast_height);
+  const auto& setup = source.setup();
+  if (lidar_choice.strict) app::refuseCutOff(endpoint.path, setup.cut_off);
+  io::prepareOutputDir(out, force);
+  std::cout << "reconstruct: " << endpoint.path << ", an " << rig::velodyne::modelName(setup.model) << " capture, calibration "
+            << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0) << setup.time_base << " s from the "
+            << setup.time_base_source << "; no camera, no gyro; unscored (a real capture has no ground truth)\n";
+  nlohmann::json report = reconstruct(source, pipe_cfg, out, nullptr, scoring);
+  std::vector<std::string> notes = {"unscored: a real capture has no ground truth; no camera images and no gyro, so nothing "
+                                    "above the lidar's reach is recovered and the heading comes from the GPS track alone"};
+  if (!setup.first_fix) notes.push_back("the capture has no GPS fix: the rig is taken to stand where it started, heading east");
+  report["scored"] = false;
+  report["time_base_s"] = setup.time_base;
+  report["time_base_source"] = setup.time_base_source;
+  addLidarToOutputs(out, report, source.lidar(), setup.cut_off, notes);
+  std::cout << "lidar " << source.lidar().summary() << "\n";
   return report;
 }
 
@@ -653,7 +745,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> pipe_settings;  // --set KEY=VALUE, applied after --config
   fs::path recon_input, recon_out;
   bool recon_force = false;
-  recon->add_option("--input", recon_input, "dataset directory (from 'terrain record')")->required();
+  recon->add_option("--input", recon_input,
+                    "dataset directory (from 'terrain record'); without it, --lidar pcap:FILE reconstructs a real capture "
+                    "alone (lidar and GPS from its packets, unscored)");
   recon->add_option("--out", recon_out, "output directory")->required();
   recon->add_flag("--force", recon_force, "write into an existing, non-empty directory");
   LidarChoice lidar_choice;
@@ -663,13 +757,19 @@ int main(int argc, char** argv) {
                    "udp:0.0.0.0:2368); camera, GPS and gyro still come from " + others + ", matched by time");
     cmd.add_option("--calibration", lidar_choice.calibration,
                    "laser calibration for --lidar (ROS YAML or db.xml); default: the laser table of " + others);
-    cmd.add_option("--lidar-time-base", lidar_choice.options.decoder.time_base,
-                   "[s] added to the packets' time since the top of the hour, to match the other sensors' clock")
+    cmd.add_option("--lidar-time-base", lidar_choice.time_base,
+                   "[s] added to the packets' time since the top of the hour; auto: 0 beside " + others +
+                       " (its clock), and for a capture reconstructed alone the hour of its GPS time, else of the capture clock")
         ->capture_default_str();
     cmd.add_option("--lidar-idle-timeout", lidar_choice.options.idle_timeout,
                    "[s] a live lidar stream ends after this long without packets")->capture_default_str();
+    cmd.add_option("--lidar-first-packet-timeout", lidar_choice.options.first_timeout,
+                   "[s] a live lidar stream without a single packet this long is an error (exit 2)")->capture_default_str();
+    cmd.add_flag("--strict", lidar_choice.strict, "a cut-off lidar capture is an error (exit 2, nothing written), not a warning");
   };
   addLidarOptions(*recon, "the dataset");
+  recon->add_option("--mast-height", lidar_choice.mast_height,
+                    "[m] lidar height above the ground, for a capture reconstructed alone")->capture_default_str();
   eval::EvaluationOptions scoring;
   const auto addScoringOptions = [&scoring](CLI::App& cmd) {
     cmd.add_flag("--baselines,!--no-baselines", scoring.ground_baselines,
@@ -761,6 +861,9 @@ int main(int argc, char** argv) {
   kitti->add_option("--json", kitti_json, "also write the scores as JSON");
   addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings, true);
 
+  // terrain lidar inspect / convert
+  const auto lidar_cmds = app::addLidarCommands(app);
+
   // usage errors end as every bad input does: the prefix and exit code 2 (help and version: 0)
   try {
     app.parse(argc, argv);
@@ -777,6 +880,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
+    if (const int rc = app::runLidarCommands(*lidar_cmds); rc >= 0) return rc;
     if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg, rec_pcap);
     if (evalc->parsed()) {
       app::SavedRun saved = app::readRunState(eval_run);
@@ -801,6 +905,11 @@ int main(int argc, char** argv) {
     }
     if (recon->parsed()) {
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
+      if (recon_input.empty()) {
+        if (lidar_choice.endpoint.empty()) throw io::InputError("give --input DATASET, or --lidar pcap:FILE to reconstruct a capture alone");
+        reconstructCapture(lidar_choice, pipe_cfg, recon_out, recon_force, scoring);
+        return 0;
+      }
       auto dataset = std::make_unique<rig::DatasetSource>(recon_input);
       // a dataset recorded from a scene still on disk can be scored against it
       std::shared_ptr<sim::World> world;

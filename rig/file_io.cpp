@@ -1,5 +1,7 @@
 #include "rig/file_io.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -59,6 +61,48 @@ void prepareOutputDir(const fs::path& dir, bool force) {
   if (ec) {
     throw InputError(dir.string() + ": cannot create directory (" + ec.message() + ")");
   }
+}
+
+StagedDirectory::StagedDirectory(fs::path target, bool force) : target_(std::move(target)), force_(force) {
+  std::error_code ec;
+  if (fs::exists(target_, ec)) {
+    if (!fs::is_directory(target_, ec)) throw InputError(target_.string() + ": exists and is not a directory");
+    if (!fs::is_empty(target_, ec) && !force_) {
+      throw InputError(target_.string() + ": directory exists and is not empty (pass --force to replace it)");
+    }
+  }
+  fs::path name = target_.filename().empty() ? target_.parent_path().filename() : target_.filename();
+  fs::path parent = target_.filename().empty() ? target_.parent_path().parent_path() : target_.parent_path();
+  partial_ = parent / (name.string() + ".partial-" + std::to_string(::getpid()));
+  fs::remove_all(partial_, ec);
+  fs::create_directories(partial_, ec);
+  if (ec) throw InputError(partial_.string() + ": cannot create directory (" + ec.message() + ")");
+}
+
+StagedDirectory::~StagedDirectory() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(partial_, ec);
+}
+
+void StagedDirectory::commit() {
+  std::error_code ec;
+  fs::path old;
+  if (fs::exists(target_, ec)) {
+    // the old directory steps aside first, so that a failed rename leaves it in place
+    old = partial_;
+    old += ".old";
+    fs::remove_all(old, ec);
+    fs::rename(target_, old, ec);
+    if (ec) throw InputError(target_.string() + ": cannot replace it (" + ec.message() + ")");
+  }
+  fs::rename(partial_, target_, ec);
+  if (ec) {
+    if (!old.empty()) fs::rename(old, target_);
+    throw InputError(target_.string() + ": cannot move the output into place (" + ec.message() + ")");
+  }
+  committed_ = true;
+  if (!old.empty()) fs::remove_all(old, ec);
 }
 
 }  // namespace terrain::io

@@ -26,4 +26,27 @@ void writeFileAtomic(const std::filesystem::path& path, const std::string& bytes
 // InputError unless force is true.
 void prepareOutputDir(const std::filesystem::path& dir, bool force);
 
+// An output directory built beside its target (TARGET.partial-PID) and moved into place by
+// commit(): until then the target is untouched, and a failure (the destructor without commit)
+// removes the partial directory. The constructor refuses a target that exists as a file, or as
+// a non-empty directory unless force; commit() then replaces it whole (no old file survives).
+class StagedDirectory {
+ public:
+  StagedDirectory(std::filesystem::path target, bool force);
+  ~StagedDirectory();
+  StagedDirectory(const StagedDirectory&) = delete;
+  StagedDirectory& operator=(const StagedDirectory&) = delete;
+
+  // where to write meanwhile
+  const std::filesystem::path& path() const { return partial_; }
+  const std::filesystem::path& target() const { return target_; }
+  // Moves the directory into place. Throws InputError if it cannot.
+  void commit();
+
+ private:
+  std::filesystem::path target_, partial_;
+  bool force_;
+  bool committed_ = false;
+};
+
 }  // namespace terrain::io

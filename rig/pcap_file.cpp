@@ -4,6 +4,7 @@
 
 #include <pcap/pcap.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -60,7 +61,10 @@ std::string ReadStats::summary() const {
   return s.str();
 }
 
-Reader::Reader(const fs::path& path, std::uint16_t port) : handle_(std::make_unique<Handle>()), path_(path), port_(port) {
+Reader::Reader(const fs::path& path, std::uint16_t port) : Reader(path, std::vector<std::uint16_t>{port}) {}
+
+Reader::Reader(const fs::path& path, std::vector<std::uint16_t> ports)
+    : handle_(std::make_unique<Handle>()), path_(path), ports_(std::move(ports)) {
   if (!fs::exists(path)) throw io::InputError(path.string() + ": no such capture file");
   char err[PCAP_ERRBUF_SIZE] = {0};
   handle_->pcap = pcap_open_offline(path.c_str(), err);
@@ -111,13 +115,15 @@ bool Reader::next(Frame& frame) {
     if (h[9] != 17) { ++stats_.other; continue; }
     if ((big16(h + 6) & 0x3FFF) != 0) { ++stats_.fragments; continue; }  // more-fragments flag or an offset
     const std::uint8_t* udp = h + ihl;
-    if (big16(udp + 2) != port_) { ++stats_.other; continue; }
+    const std::uint16_t port = big16(udp + 2);
+    if (std::find(ports_.begin(), ports_.end(), port) == ports_.end()) { ++stats_.other; continue; }
     const std::size_t udp_len = big16(udp + 4);
     if (udp_len < 8) { ++stats_.malformed; continue; }
     // the payload as far as it was captured
     const std::size_t start = ip + ihl + 8;
     const std::size_t len = std::min(udp_len - 8, n - start);
     frame.time = header->ts.tv_sec + header->ts.tv_usec * 1e-6;
+    frame.port = port;
     frame.payload.assign(data + start, data + start + len);
     ++stats_.payloads;
     return true;
@@ -145,7 +151,7 @@ Writer::~Writer() {
   }
 }
 
-void Writer::write(double time, const std::uint8_t* payload, std::size_t size) {
+void Writer::write(double time, const std::uint8_t* payload, std::size_t size, std::uint16_t port) {
   std::vector<std::uint8_t> f(42 + size);
   // Ethernet: broadcast from a Velodyne address (OUI 60:76:88)
   const std::uint8_t mac[12] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x60, 0x76, 0x88, 0x00, 0x00, 0x2B};
@@ -162,10 +168,10 @@ void Writer::write(double time, const std::uint8_t* payload, std::size_t size) {
   const std::uint8_t addrs[8] = {192, 168, 3, 43, 255, 255, 255, 255};
   std::copy(addrs, addrs + 8, ip + 12);
   putBig16(ip + 10, ipChecksum(ip, 20));
-  // UDP 2368 -> 2368, checksum left out (optional over IPv4)
+  // UDP port -> port, checksum left out (optional over IPv4)
   std::uint8_t* udp = ip + 20;
-  putBig16(udp, 2368);
-  putBig16(udp + 2, 2368);
+  putBig16(udp, port);
+  putBig16(udp + 2, port);
   putBig16(udp + 4, static_cast<std::uint16_t>(8 + size));
   std::copy(payload, payload + size, udp + 8);
   pcap_pkthdr h{};

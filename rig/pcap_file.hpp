@@ -18,12 +18,13 @@ inline constexpr double kSimulationEpoch = 1767225600.0;
 
 struct Frame {
   double time = 0;                    // [s] capture time (seconds since 1970)
+  std::uint16_t port = 0;             // UDP destination port
   std::vector<std::uint8_t> payload;  // UDP payload as captured (may be cut short by the snap length)
 };
 
 struct ReadStats {
   long long frames = 0;     // records in the file
-  long long payloads = 0;   // UDP datagrams to the port
+  long long payloads = 0;   // UDP datagrams to the port(s) read
   long long other = 0;      // other traffic: not IPv4/UDP, or another port
   long long fragments = 0;  // IPv4 fragments (a sensor never fragments)
   long long malformed = 0;  // headers cut short or inconsistent
@@ -37,11 +38,13 @@ class Reader {
   // Opens a capture (Ethernet, Linux cooked or raw IP link layer). Throws io::InputError naming
   // the file if it cannot be opened or its link layer is not one of those.
   Reader(const std::filesystem::path& path, std::uint16_t port);
+  // ... returning the datagrams to any of these ports (Frame::port says which)
+  Reader(const std::filesystem::path& path, std::vector<std::uint16_t> ports);
   ~Reader();
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
 
-  // The next UDP payload to the port; false at the end of the file (or where it is cut off).
+  // The next UDP payload to the port(s); false at the end of the file (or where it is cut off).
   bool next(Frame& frame);
   const ReadStats& stats() const { return stats_; }
 
@@ -49,7 +52,7 @@ class Reader {
   struct Handle;
   std::unique_ptr<Handle> handle_;
   std::filesystem::path path_;
-  std::uint16_t port_;
+  std::vector<std::uint16_t> ports_;
   int link_ = 0;
   ReadStats stats_;
 };
@@ -64,7 +67,8 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
 
   // One UDP datagram from the sensor (192.168.3.43:2368) to the broadcast address, port 2368.
-  void write(double time, const std::uint8_t* payload, std::size_t size);
+  // `port` is the destination (and source) port: 2368 data, 8308 position packets.
+  void write(double time, const std::uint8_t* payload, std::size_t size, std::uint16_t port = 2368);
   void close();
 
  private:

@@ -30,27 +30,30 @@ void put(char*& p, T v) {
 
 }  // namespace
 
-std::string encodePcd(const LidarSweep& sweep, const std::vector<PointTruth>& truth) {
+std::string encodePcd(const LidarSweep& sweep, const std::vector<PointTruth>& truth, bool truth_fields) {
   const std::size_t n = sweep.points.size();
+  const std::size_t fields = truth_fields ? std::size(kFields) : std::size(kFields) - 2;  // label and class last
+  const int record = truth_fields ? kRecordSize : kRecordSize - 5;
   std::ostringstream h;
   h << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS";
-  for (const auto& f : kFields) h << ' ' << f.name;
+  for (std::size_t i = 0; i < fields; ++i) h << ' ' << kFields[i].name;
   h << "\nSIZE";
-  for (const auto& f : kFields) h << ' ' << f.size;
+  for (std::size_t i = 0; i < fields; ++i) h << ' ' << kFields[i].size;
   h << "\nTYPE";
-  for (const auto& f : kFields) h << ' ' << f.type;
+  for (std::size_t i = 0; i < fields; ++i) h << ' ' << kFields[i].type;
   h << "\nCOUNT";
-  for (std::size_t i = 0; i < std::size(kFields); ++i) h << " 1";
+  for (std::size_t i = 0; i < fields; ++i) h << " 1";
   h << "\nWIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << n << "\nDATA binary\n";
   std::string out = h.str();
   const std::size_t header = out.size();
-  out.resize(header + n * kRecordSize);
+  out.resize(header + n * record);
   char* p = out.data() + header;
   for (std::size_t i = 0; i < n; ++i) {
     const LidarPoint& q = sweep.points[i];
     const PointTruth t = truth.empty() ? PointTruth{} : truth[i];
     put(p, q.x), put(p, q.y), put(p, q.z), put(p, q.intensity), put(p, q.ring);
-    put(p, q.azimuth), put(p, q.time), put(p, t.geom), put(p, t.cls);
+    put(p, q.azimuth), put(p, q.time);
+    if (truth_fields) put(p, t.geom), put(p, t.cls);
   }
   return out;
 }

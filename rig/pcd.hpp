@@ -13,7 +13,8 @@
 namespace terrain::rig {
 
 // Encodes a sweep as binary PCD. truth may be empty; otherwise it has one entry per point.
-std::string encodePcd(const LidarSweep& sweep, const std::vector<PointTruth>& truth);
+// Without truth_fields the file has only x y z intensity ring azimuth time (a real sensor's sweep).
+std::string encodePcd(const LidarSweep& sweep, const std::vector<PointTruth>& truth, bool truth_fields = true);
 
 struct DecodedPcd {
   std::vector<LidarPoint> points;

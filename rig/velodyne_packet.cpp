@@ -51,6 +51,44 @@ Model modelForLasers(int lasers, const std::string& origin) {
 
 const char* modelName(Model model) { return model == Model::Hdl32E ? "HDL-32E" : "HDL-64E"; }
 
+const char* returnModeName(ReturnMode mode) {
+  switch (mode) {
+    case ReturnMode::Last: return "last";
+    case ReturnMode::Dual: return "dual";
+    default: return "strongest";
+  }
+}
+
+std::optional<Model> packetModel(const std::uint8_t* data, std::size_t size, std::string* why) {
+  const auto fail = [why](const std::string& reason) -> std::optional<Model> {
+    if (why) *why = reason;
+    return std::nullopt;
+  };
+  if (size != kPacketSize) return fail(std::to_string(size) + " bytes, not the 1206 of a data packet");
+  bool all_upper = true, alternating = true;
+  for (int b = 0; b < kBlocksPerPacket; ++b) {
+    const std::uint16_t id = get16(data + b * kBlockBytes);
+    all_upper = all_upper && id == kUpperBlock;
+    alternating = alternating && id == (b % 2 == 0 ? kUpperBlock : kLowerBlock);
+  }
+  if (alternating) return Model::Hdl64E;
+  if (!all_upper) return fail("block ids are neither the HDL-64E's (0xEEFF, 0xDDFF in turn) nor the HDL-32E's (0xEEFF)");
+  const std::uint8_t factory = data[1205];
+  if (factory == 0x21 || factory == 0) return Model::Hdl32E;
+  if (factory == 0x22) return fail("a VLP-16 packet (model byte 0x22), which this decoder does not read");
+  if (factory == 0x28) return fail("a VLP-32C packet (model byte 0x28), which this decoder does not read");
+  std::ostringstream s;
+  s << "model byte 0x" << std::hex << int(factory) << " is no HDL-32E's (0x21)";
+  return fail(s.str());
+}
+
+ReturnMode packetReturnMode(const std::uint8_t* data, Model model) {
+  if (model != Model::Hdl32E) return ReturnMode::Strongest;
+  if (data[1204] == 0x38) return ReturnMode::Last;
+  if (data[1204] == 0x39) return ReturnMode::Dual;
+  return ReturnMode::Strongest;
+}
+
 std::uint32_t payloadTimestamp(const std::uint8_t* data) { return get32(data + kBlocksPerPacket * kBlockBytes); }
 
 std::string DecodeStats::summary() const {
@@ -59,6 +97,8 @@ std::string DecodeStats::summary() const {
   auto add = [&](long long n, const char* what) {
     if (n > 0) s << ", " << n << ' ' << what;
   };
+  add(dual_packets, "in dual return mode");
+  add(second_returns, "second returns");
   add(wrong_size, "of the wrong size");
   add(bad_block, "with a bad block id");
   add(bad_position, "with a bad rotational position");
@@ -191,20 +231,26 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
     ++stats_.wrong_size;
     return false;
   }
-  // the block ids and positions must be those of a spinning sensor of this model
-  const int blocks_per_firing = kBlocksPerPacket / timing_.firings_per_packet;
+  // the block ids and positions must be those of a spinning sensor of this model; in dual return
+  // mode (HDL-32E) the blocks come in pairs at one position
+  const ReturnMode mode = packetReturnMode(data, model_);
+  const int copies = mode == ReturnMode::Dual ? 2 : 1;
+  const int ids_per_firing = kBlocksPerPacket / timing_.firings_per_packet;
+  const int blocks_per_firing = ids_per_firing * copies;
+  const int firings = kBlocksPerPacket / blocks_per_firing;
   int steps[kBlocksPerPacket];
   for (int b = 0; b < kBlocksPerPacket; ++b) {
     const std::uint8_t* block = data + b * kBlockBytes;
     const std::uint16_t id = get16(block);
-    const std::uint16_t expected = (b % blocks_per_firing == 0) ? kUpperBlock : kLowerBlock;
+    const std::uint16_t expected = (b % ids_per_firing == 0) ? kUpperBlock : kLowerBlock;
     if (id != expected) {
       ++stats_.bad_block;
       ++rejected_since_;
       return false;
     }
     steps[b] = get16(block + 2);
-    if (steps[b] > kStepsPerTurn ||
+    const bool pair_apart = copies == 2 && b % 2 == 1 && steps[b] != steps[b - 1];
+    if (steps[b] > kStepsPerTurn || pair_apart ||
         (b > 0 && (steps[b] - steps[b - 1] + kStepsPerTurn) % kStepsPerTurn > kMaxStepJump)) {
       ++stats_.bad_position;
       ++rejected_since_;
@@ -231,7 +277,7 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
       ++stats_.out_of_order;
       return false;
     }
-    const double packet_us = timing_.firings_per_packet * timing_.firing_period * 1e6;
+    const double packet_us = firings * timing_.firing_period * 1e6;
     const double gap = (time_us - last_time_us_) / packet_us;
     // the slots between the two packets that rejected packets took were not lost
     if (gap > 1.5) stats_.lost += std::max(0LL, std::llround(gap) - 1 - rejected_since_);
@@ -242,6 +288,7 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
   std::memcpy(last_payload_.data(), data, kPacketSize);
   have_payload_ = true;
   ++stats_.accepted;
+  if (copies == 2) ++stats_.dual_packets;
 
   const double packet_time = options_.time_base + time_us * 1e-6;
   const double res = calibration_.distance_resolution;
@@ -266,13 +313,15 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
       have_last_ = true;
       last_step_ = step;
     }
-    const int first_laser = (b % blocks_per_firing) * kReturnsPerBlock;
+    const int first_laser = (b % ids_per_firing) * kReturnsPerBlock;
+    const bool second = copies == 2 && b % 2 == 1;  // the strongest return of a dual pair
     const int direction = step % kStepsPerTurn;  // 36000 is 0 degrees
     const double ca = (*cos_step_)[direction], sa = (*sin_step_)[direction];
     for (int i = 0; i < kReturnsPerBlock; ++i) {
       const std::uint8_t* r = block + 4 + 3 * i;
       const std::uint16_t raw = get16(r);
       if (raw == 0) continue;
+      if (second && get16(r - kBlockBytes) == raw) continue;  // the same return as the last one
       const int laser = first_laser + i;
       const LaserCorrection& l = calibration_.lasers[laser];
       const double range = raw * res + l.dist_correction;
@@ -291,9 +340,10 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
       p.time = t;
       current_.points.push_back(p);
       ++stats_.points;
+      if (second) ++stats_.second_returns;
     }
   }
-  current_.end_time = packet_time + timing_.firings_per_packet * timing_.firing_period;
+  current_.end_time = packet_time + firings * timing_.firing_period;
   return true;
 }
 

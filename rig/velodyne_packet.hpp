@@ -9,7 +9,11 @@
 // the top of the hour and two status bytes.
 //
 // HDL-64E: each packet holds 6 firings of all 64 lasers, an upper block followed by a lower block
-// at the same rotational position. HDL-32E: 12 firings of 32 lasers, every block 0xEEFF.
+// at the same rotational position. HDL-32E: 12 firings of 32 lasers, every block 0xEEFF; its
+// status bytes give the return mode (0x37 strongest, 0x38 last, 0x39 dual) and the model (0x21).
+// In dual return mode the blocks come in pairs at one position, 6 firings per packet: the first of
+// a pair holds the last return, the second the strongest (or, where the two are one, the second
+// strongest); a return the second block repeats is decoded once.
 // The packet's timestamp is the time of its first firing; later firings follow at the model's
 // firing period. Points are computed with rig::laserRay (the db.xml correction model).
 
@@ -31,10 +35,12 @@ inline constexpr int kReturnsPerBlock = 32;
 inline constexpr std::uint16_t kUpperBlock = 0xEEFF;
 inline constexpr std::uint16_t kLowerBlock = 0xDDFF;
 inline constexpr std::uint16_t kDataPort = 2368;
+inline constexpr std::uint16_t kPositionPort = 8308;   // position packets (rig/velodyne_position.hpp)
 inline constexpr int kStepsPerTurn = 36000;            // rotational positions per revolution
 inline constexpr std::uint32_t kMicrosPerHour = 3600000000u;
 
 enum class Model { Hdl64E, Hdl32E };
+enum class ReturnMode { Strongest, Last, Dual };
 
 struct ModelTiming {
   int lasers = 64;
@@ -46,6 +52,17 @@ ModelTiming timing(Model model);
 // HDL-64E for 64 lasers, HDL-32E for 32; throws io::InputError naming origin otherwise.
 Model modelForLasers(int lasers, const std::string& origin);
 const char* modelName(Model model);
+const char* returnModeName(ReturnMode mode);
+
+// The sensor that sent a data packet, from its layout: upper and lower blocks in turn for the
+// HDL-64E; upper blocks only, with model byte 0x21 (or 0, as older firmware sends), for the
+// HDL-32E. nullopt for a payload that is no data packet this decoder reads; *why (may be null)
+// then says what it is (the wrong size, a VLP-16 or VLP-32C by its model byte, unknown blocks).
+std::optional<Model> packetModel(const std::uint8_t* data, std::size_t size, std::string* why = nullptr);
+// The return mode of a data packet of that model: the HDL-32E's status byte (an unknown value
+// reads as strongest); the HDL-64E S2 sends one return, strongest (its status bytes cycle
+// through other information).
+ReturnMode packetReturnMode(const std::uint8_t* data, Model model);
 
 // Rotational position (0.01 deg steps) of firing j of n firings per revolution.
 inline int encoderStep(long long j, long long n) {
@@ -112,6 +129,8 @@ struct DecodeStats {
   long long out_of_order = 0;   // older than the last accepted packet
   long long lost = 0;           // packets missing by the timestamps (rejected ones not among them)
   long long points = 0;         // returns decoded
+  long long dual_packets = 0;   // packets in dual return mode
+  long long second_returns = 0; // returns of the second block of a dual pair (not repeats of the first)
   long long sweeps = 0;         // sweeps completed
 
   long long rejected() const { return wrong_size + bad_block + bad_position + bad_timestamp + duplicates + out_of_order; }

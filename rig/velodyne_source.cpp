@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cstring>
 #include <map>
+#include <sstream>
 
 namespace terrain::rig {
 
@@ -127,7 +128,8 @@ void UdpSender::send(const std::uint8_t* data, std::size_t size) {
 VelodyneLidar::VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration calibration, VelodyneOptions options)
     : endpoint_(endpoint), options_(options), assembler_(std::move(calibration), options.decoder) {
   if (endpoint_.kind == LidarEndpoint::Kind::Pcap) {
-    pcap_ = std::make_unique<pcap::Reader>(endpoint_.path, endpoint_.port);
+    pcap_ = std::make_unique<pcap::Reader>(endpoint_.path,
+                                           std::vector<std::uint16_t>{endpoint_.port, velodyne::kPositionPort});
   } else {
     udp_ = std::make_unique<UdpReceiver>(endpoint_.host, endpoint_.port);
     buffer_.resize(65536);  // the largest UDP datagram
@@ -145,26 +147,97 @@ std::optional<LidarSweep> VelodyneLidar::next() {
     if (pcap_) {
       pcap::Frame f;
       got = pcap_->next(f);
-      if (got) assembler_.push(f.payload.data(), f.payload.size(), ready_);
+      if (got && f.port == velodyne::kPositionPort && endpoint_.port != velodyne::kPositionPort) {
+        position(f.payload);
+        continue;
+      }
+      if (got && !assembler_.push(f.payload.data(), f.payload.size(), ready_)) checkModel(f.payload.data(), f.payload.size());
     } else {
       const double wait = received_ ? options_.idle_timeout : options_.first_timeout;
       const long n = udp_->receive(buffer_.data(), buffer_.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
       got = n >= 0;
+      if (!got && !received_) {
+        std::ostringstream m;
+        m << endpoint_.describe() << ": no packet arrived within " << options_.first_timeout
+          << " s (--lidar-first-packet-timeout); is the sensor on, and sending to this host and port?";
+        throw io::InputError(m.str());
+      }
       if (got) {
         received_ = true;
-        assembler_.push(buffer_.data(), static_cast<std::size_t>(n), ready_);
+        const std::size_t size = std::min(static_cast<std::size_t>(n), buffer_.size());
+        if (!assembler_.push(buffer_.data(), static_cast<std::size_t>(n), ready_)) checkModel(buffer_.data(), size);
       }
     }
     if (!got) {
       ended_ = true;
       if (auto last = assembler_.flush()) ready_.push_back(std::move(*last));
+      if (assembler_.stats().sweeps == 0) throw io::InputError(endpoint_.describe() + ": no sweep decoded (" + summary() + ")");
     }
   }
   return std::move(ready_[ready_pos_++]);
 }
 
+void VelodyneLidar::checkModel(const std::uint8_t* data, std::size_t size) {
+  const auto model = velodyne::packetModel(data, size);
+  if (model && *model != assembler_.model()) {
+    const LaserCalibration& c = assembler_.calibration();
+    throw io::InputError(endpoint_.describe() + ": the packets are an " + velodyne::modelName(*model) + "'s, but the calibration " +
+                         c.source + " has " + std::to_string(c.laserCount()) + " lasers (an " +
+                         velodyne::modelName(assembler_.model()) + "); give the " + velodyne::modelName(*model) +
+                         "'s calibration, or none to take the shipped one");
+  }
+}
+
+void VelodyneLidar::position(const std::vector<std::uint8_t>& payload) {
+  ++position_.packets;
+  std::string why;
+  const auto packet = velodyne::parsePositionPacket(payload.data(), payload.size(), &why);
+  const auto note = [this](const std::string& reason) {
+    if (position_.first_problem.empty()) position_.first_problem = reason;
+  };
+  if (!packet) {
+    ++position_.unreadable;
+    note("position packet " + std::to_string(position_.packets) + ": " + why);
+    return;
+  }
+  if (packet->nmea.empty()) {
+    ++position_.no_sentence;
+    return;
+  }
+  const auto fix = velodyne::parseNmea(packet->nmea, &why);
+  if (!fix) {
+    ++position_.bad_sentence;
+    note("position packet " + std::to_string(position_.packets) + ": '" + packet->nmea + "': " + why);
+    return;
+  }
+  if (!fix->valid) {
+    ++position_.no_fix;
+    return;
+  }
+  ++position_.fixes;
+  fixes_.push_back(velodyne::gpsFix(*packet, *fix, options_.decoder.time_base));
+}
+
+std::vector<GpsFix> VelodyneLidar::takeFixes() {
+  std::vector<GpsFix> out;
+  out.swap(fixes_);
+  return out;
+}
+
+std::string PositionStats::summary() const {
+  std::ostringstream s;
+  s << packets << " position packets, " << fixes << " GPS fixes";
+  if (no_fix > 0) s << ", " << no_fix << " without a fix";
+  if (no_sentence > 0) s << ", " << no_sentence << " without a sentence";
+  if (bad_sentence > 0) s << ", " << bad_sentence << " with a bad sentence";
+  if (unreadable > 0) s << ", " << unreadable << " unreadable";
+  if (!first_problem.empty()) s << " (first: " << first_problem << ")";
+  return s.str();
+}
+
 std::string VelodyneLidar::summary() const {
   std::string s = endpoint_.describe() + " (" + velodyne::modelName(assembler_.model()) + "): " + assembler_.stats().summary();
+  if (position_.packets > 0) s += "; " + position_.summary();
   if (pcap_) s += "; capture: " + pcap_->stats().summary();
   return s;
 }

@@ -6,6 +6,7 @@
 #include "rig/pcap_file.hpp"
 #include "rig/sensor_source.hpp"
 #include "rig/velodyne_packet.hpp"
+#include "rig/velodyne_position.hpp"
 
 #include <chrono>
 #include <cstdint>
@@ -67,10 +68,28 @@ class UdpSender {
 struct VelodyneOptions {
   velodyne::DecoderOptions decoder;
   double idle_timeout = 2.0;  // [s] a live stream ends after this long without a packet (once one came)
-  double first_timeout = 30.0;  // [s] ... or without the first packet
+  double first_timeout = 30.0;  // [s] no packet within this long is an error
 };
 
-// Sweeps from a live sensor or a capture.
+// What the position packets (port 8308) of a capture held.
+struct PositionStats {
+  long long packets = 0;      // datagrams to port 8308
+  long long unreadable = 0;   // not a position packet (size, timestamp)
+  long long no_sentence = 0;  // no NMEA sentence in it
+  long long bad_sentence = 0; // a sentence that does not parse (checksum, fields)
+  long long no_fix = 0;       // a sentence that says the receiver has no fix (RMC V, GGA quality 0)
+  long long fixes = 0;        // valid fixes
+  std::string first_problem;  // the first unreadable packet's or bad sentence's reason
+
+  std::string summary() const;
+};
+
+// Sweeps from a live sensor or a capture. A capture's position packets become GPS fixes on the
+// data packets' clock (takeFixes). A live source reads data packets only.
+//
+// Failures (io::InputError, naming the source): packets of another model than the calibration's
+// (the calibration says 64 lasers, the packets are an HDL-32E's); no packet within first_timeout
+// on a live source; a stream that ends without a single sweep.
 class VelodyneLidar {
  public:
   VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration calibration, VelodyneOptions options = {});
@@ -80,6 +99,11 @@ class VelodyneLidar {
   std::optional<LidarSweep> next();
 
   const velodyne::DecodeStats& stats() const { return assembler_.stats(); }
+  const PositionStats& positionStats() const { return position_; }
+  // the capture reader's counters (zeros for a live source)
+  pcap::ReadStats captureStats() const { return pcap_ ? pcap_->stats() : pcap::ReadStats{}; }
+  // GPS fixes decoded since the last call, oldest first
+  std::vector<GpsFix> takeFixes();
   // decoder counters, and for a capture the reader's
   std::string summary() const;
   const LaserCalibration& calibration() const { return assembler_.calibration(); }
@@ -97,6 +121,10 @@ class VelodyneLidar {
   std::size_t ready_pos_ = 0;
   bool ended_ = false;
   bool received_ = false;
+  void position(const std::vector<std::uint8_t>& payload);
+  void checkModel(const std::uint8_t* data, std::size_t size);
+  PositionStats position_;
+  std::vector<GpsFix> fixes_;
 };
 
 // A rig whose lidar sweeps come from a VelodyneLidar and whose camera, GPS and gyro come from
