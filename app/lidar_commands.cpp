@@ -1,5 +1,7 @@
 #include "app/lidar_commands.hpp"
 
+#include "app/interrupt.hpp"
+
 #include "rig/file_io.hpp"
 #include "rig/pcd.hpp"
 
@@ -160,6 +162,7 @@ int convert(const LidarCommands& c) {
   csv << "sweep,file,start_s,end_s,points,partial\n" << std::setprecision(17);
   int index = 0;
   const auto write = [&](const LidarSweep& sweep, const rig::SweepSummary& s) {
+    throwIfInterrupted();
     char name[32];
     std::snprintf(name, sizeof name, "%06d", index);
     io::writeFileAtomic(dir / "sweeps" / (std::string(name) + ".pcd"), rig::encodePcd(sweep, {}, false), false);

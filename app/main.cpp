@@ -8,6 +8,7 @@
 //   lidar             a real Velodyne capture alone: inspect, convert (app/lidar_commands.hpp)
 #include "app/bounded_queue.hpp"
 #include "app/html_report.hpp"
+#include "app/interrupt.hpp"
 #include "app/lidar_commands.hpp"
 #include "app/outputs.hpp"
 #include "app/pipeline_config_io.hpp"
@@ -31,6 +32,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <iomanip>
@@ -342,6 +344,7 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   int done = 0, last_written = -1;
   try {
     while (auto frame = queue.pop()) {
+      app::throwIfInterrupted();
       const int before = pipeline.lastBoundaryFrame();
       pipeline.process(*frame);
       // boundary images of every tenth frame (paper Fig. 7)
@@ -373,7 +376,9 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
     dropBoundaryImages();
     std::rethrow_exception(sensing_error);
   }
+  app::throwIfInterrupted();
   pipeline.finish();
+  app::throwIfInterrupted();
   app::writeReconstruction(out, pipeline);
   // summary
   std::vector<double> total, seg;
@@ -410,11 +415,21 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   if (scored) app::writeRunState(out, pipeline, truth, world->scenePath());
   nlohmann::json report = evaluate(pipeline, truth, scored ? world : nullptr, out, quiet, scoring);
   if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json"
-                        << (scored ? ", report.html, state/" : "") << " into " << fs::absolute(out).string() << "\n";
+                        << (scored ? ", report.html, state/" : "") << "\n";
   return report;
 }
 
 // generate a scenario's scene into out/scene, simulate and reconstruct it into out
+// an input a command reads must not lie inside the output directory it replaces
+void refuseInputInside(const fs::path& out, const fs::path& input, const std::string& option) {
+  const fs::path o = fs::weakly_canonical(fs::absolute(out)), i = fs::weakly_canonical(fs::absolute(input));
+  const fs::path rel = i.lexically_relative(o);
+  if (!rel.empty() && *rel.begin() != "..") {
+    throw io::InputError(option + " " + input.string() + " lies inside --out " + out.string() +
+                         ", which the command replaces: give another --out");
+  }
+}
+
 rig::velodyne::Model modelForLasers(const rig::VelodyneLidar& lidar) {
   return rig::velodyne::modelForLasers(lidar.calibration().laserCount(), lidar.calibration().source);
 }
@@ -515,19 +530,22 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
   rig::CaptureSource source(endpoint.path, capture, lidar_choice.mast_height);
   const auto& setup = source.setup();
   if (lidar_choice.strict) app::refuseCutOff(endpoint.path, setup.cut_off);
-  io::prepareOutputDir(out, force);
+  refuseInputInside(out, endpoint.path, "--lidar");
+  io::StagedDirectory staged(out, force);
   std::cout << "reconstruct: " << endpoint.path << ", an " << rig::velodyne::modelName(setup.model) << " capture, calibration "
             << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0) << setup.time_base << " s from the "
             << setup.time_base_source << "; no camera, no gyro; unscored (a real capture has no ground truth)\n";
-  nlohmann::json report = reconstruct(source, pipe_cfg, out, nullptr, scoring);
+  nlohmann::json report = reconstruct(source, pipe_cfg, staged.path(), nullptr, scoring);
   std::vector<std::string> notes = {"unscored: a real capture has no ground truth; no camera images and no gyro, so nothing "
                                     "above the lidar's reach is recovered and the heading comes from the GPS track alone"};
   if (!setup.first_fix) notes.push_back("the capture has no GPS fix: the rig is taken to stand where it started, heading east");
   report["scored"] = false;
   report["time_base_s"] = setup.time_base;
   report["time_base_source"] = setup.time_base_source;
-  addLidarToOutputs(out, report, source.lidar(), setup.cut_off, notes);
-  std::cout << "lidar " << source.lidar().summary() << "\n";
+  addLidarToOutputs(staged.path(), report, source.lidar(), setup.cut_off, notes);
+  app::throwIfInterrupted();
+  staged.commit();
+  std::cout << "lidar " << source.lidar().summary() << "\noutputs in " << fs::absolute(out).string() << "\n";
   return report;
 }
 
@@ -535,20 +553,28 @@ nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int fram
                            const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet,
                            const eval::EvaluationOptions& scoring, const LidarChoice* lidar = nullptr) {
   sim::validate(sim_cfg);  // bad settings are refused before anything is written
-  io::prepareOutputDir(out, force);
+  // everything goes into a staged directory that replaces out only once the run is complete
+  io::StagedDirectory staged(out, force);
+  const fs::path dir = staged.path();
   scenes::SceneConfig scene_cfg;
   scene_cfg.type = type;
   scene_cfg.seed = seed;
-  const fs::path scene_path = out / "scene" / (type + "_" + std::to_string(seed) + ".xml");
-  scenes::writeScene(scenes::generateScene(scene_cfg), scene_path, force);
+  const fs::path scene_path = dir / "scene" / (type + "_" + std::to_string(seed) + ".xml");
+  scenes::writeScene(scenes::generateScene(scene_cfg), scene_path, true);
   auto world = std::make_shared<sim::World>(scene_path);
+  nlohmann::json report;
   if (lidar && !lidar->endpoint.empty()) {
     // camera, GPS and gyro simulated, the lidar from packets (for example 'terrain stream --scene')
-    return reconstructWithLidar(std::make_unique<sim::SimulatedRig>(world, sim_cfg, frames), *lidar, pipe_cfg, out,
-                                world.get(), scoring);
+    report = reconstructWithLidar(std::make_unique<sim::SimulatedRig>(world, sim_cfg, frames), *lidar, pipe_cfg, dir,
+                                  world.get(), scoring);
+  } else {
+    sim::SimulatedRig rig(world, sim_cfg, frames);
+    report = reconstruct(rig, pipe_cfg, dir, world.get(), scoring, quiet);
   }
-  sim::SimulatedRig rig(world, sim_cfg, frames);
-  return reconstruct(rig, pipe_cfg, out, world.get(), scoring, quiet);
+  app::throwIfInterrupted();
+  staged.commit();
+  if (!quiet) std::cout << "outputs in " << fs::absolute(out).string() << "\n";
+  return report;
 }
 
 int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool force) {
@@ -568,7 +594,8 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   producer["scene_type"] = world->truth().type;
   producer["scene_seed"] = world->truth().seed;
   producer["simulation"] = nlohmann::json::parse(sim::simConfigToJson(config));
-  rig::DatasetWriter writer(out, rig.calibration(), rig.lasers(), producer.dump(), force);
+  io::StagedDirectory staged(out, force);
+  rig::DatasetWriter writer(staged.path(), rig.calibration(), rig.lasers(), producer.dump(), true);
   // the same sweeps as HDL-64E packets in a capture, as the real sensor would have sent them
   std::unique_ptr<rig::pcap::Writer> capture;
   std::unique_ptr<rig::velodyne::PacketEncoder> encoder;
@@ -578,13 +605,14 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
     packets.clear();
   };
   if (with_pcap) {
-    capture = std::make_unique<rig::pcap::Writer>(out / "lidar.pcap", force);
+    capture = std::make_unique<rig::pcap::Writer>(staged.path() / "lidar.pcap", true);
     encoder = std::make_unique<rig::velodyne::PacketEncoder>(rig.lasers(), rig.firingsPerTurn());
   }
   app::Progress progress("record", frames);
   long long points = 0;
   const auto t0 = std::chrono::steady_clock::now();
   while (auto frame = rig.next()) {
+    app::throwIfInterrupted();
     points += static_cast<long long>(frame->sensors.sweep.points.size());
     writer.write(*frame);
     if (encoder) {
@@ -605,6 +633,8 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
     std::cout << "\n";
   }
   writer.finish();
+  app::throwIfInterrupted();
+  staged.commit();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << "recorded " << frames << " frames (" << points << " lidar points, " << rig.raysCast() << " rays, "
             << static_cast<long long>(rig.raysCast() / std::max(seconds, 1e-9)) << " rays/s) into "
@@ -726,7 +756,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
   rec->add_option("--out", rec_out, "output dataset directory")->required();
-  rec->add_flag("--force", rec_force, "write into an existing, non-empty directory");
+  rec->add_flag("--force", rec_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
   bool rec_pcap = false;
   rec->add_flag("--pcap", rec_pcap, "also write the lidar as HDL-64E packets in OUT/lidar.pcap (Wireshark, VeloView, PCL open it)");
   try {
@@ -749,7 +779,7 @@ int main(int argc, char** argv) {
                     "dataset directory (from 'terrain record'); without it, --lidar pcap:FILE reconstructs a real capture "
                     "alone (lidar and GPS from its packets, unscored)");
   recon->add_option("--out", recon_out, "output directory")->required();
-  recon->add_flag("--force", recon_force, "write into an existing, non-empty directory");
+  recon->add_flag("--force", recon_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
   LidarChoice lidar_choice;
   auto addLidarOptions = [&lidar_choice](CLI::App& cmd, const std::string& others) {
     cmd.add_option("--lidar", lidar_choice.endpoint,
@@ -818,7 +848,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
   run->add_option("--out", run_out, "output directory")->capture_default_str();
-  run->add_flag("--force", run_force, "write into an existing, non-empty directory");
+  run->add_flag("--force", run_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
   addLidarOptions(*run, "the simulated rig");
   addScoringOptions(*run);
   try {
@@ -847,8 +877,17 @@ int main(int argc, char** argv) {
   reg->add_option("--baseline", reg_baseline, "baseline JSON to compare with; any metric past its tolerance fails the run (exit 1)");
   reg->add_option("--write-baseline", reg_write, "run the suite and write its metrics as the new baseline (the only way baselines change)");
   reg->add_option("--junit", reg_junit, "also write the comparison as JUnit XML");
-  reg->add_option("--out", reg_out, "directory for the scenarios' outputs (default out/regress-SUITE)");
-  reg->add_flag("--force", reg_force, "overwrite an existing --write-baseline file");
+  reg->add_option("--out", reg_out, "directory for the scenarios' outputs (default out/regress-SUITE, reused run after run)");
+  std::string reg_shard;
+  std::vector<fs::path> reg_merge;
+  reg->add_option("--shard", reg_shard,
+                  "run only part K of N of the suite (K/N: every N-th scenario from the K-th) and write its results "
+                  "and shard.json into --out, for 'regress --merge' (cluster sweeps); never writes a baseline");
+  reg->add_option("--merge", reg_merge,
+                  "run nothing: merge the --out directories of every shard of the suite, then compare or write the "
+                  "baseline as a whole run would (a missing, failed or duplicated shard is an error)")
+      ->excludes(reg->get_option("--shard"));
+  reg->add_flag("--force", reg_force, "replace an existing --write-baseline file, and write into a non-empty --out");
   addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
 
   // terrain kitti
@@ -878,6 +917,7 @@ int main(int argc, char** argv) {
               << "Run with --help for more information.\n";
     return 2;
   }
+  app::installInterruptHandlers();
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
     if (const int rc = app::runLidarCommands(*lidar_cmds); rc >= 0) return rc;
@@ -917,16 +957,24 @@ int main(int argc, char** argv) {
       if (producer.contains("scene") && producer["scene"].is_string() && fs::exists(producer["scene"].get<std::string>())) {
         world = std::make_shared<sim::World>(producer["scene"].get<std::string>());
       }
+      refuseInputInside(recon_out, recon_input, "--input");
       if (lidar_choice.endpoint.empty()) {
         if (!lidar_choice.calibration.empty()) throw io::InputError("--calibration applies to --lidar only");
-        io::prepareOutputDir(recon_out, recon_force);
-        reconstruct(*dataset, pipe_cfg, recon_out, world.get(), scoring);
+        io::StagedDirectory staged(recon_out, recon_force);
+        reconstruct(*dataset, pipe_cfg, staged.path(), world.get(), scoring);
+        app::throwIfInterrupted();
+        staged.commit();
+        std::cout << "outputs in " << fs::absolute(recon_out).string() << "\n";
         return 0;
       }
       // the real-driver path: the lidar from packets, everything else from the dataset
-      rig::LidarEndpoint::parse(lidar_choice.endpoint);  // a bad endpoint is refused before anything is written
-      io::prepareOutputDir(recon_out, recon_force);
-      reconstructWithLidar(std::move(dataset), lidar_choice, pipe_cfg, recon_out, world.get(), scoring);
+      const auto endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);  // refused before anything is written
+      if (endpoint.kind == rig::LidarEndpoint::Kind::Pcap) refuseInputInside(recon_out, endpoint.path, "--lidar");
+      io::StagedDirectory staged(recon_out, recon_force);
+      reconstructWithLidar(std::move(dataset), lidar_choice, pipe_cfg, staged.path(), world.get(), scoring);
+      app::throwIfInterrupted();
+      staged.commit();
+      std::cout << "outputs in " << fs::absolute(recon_out).string() << "\n";
       return 0;
     }
     if (run->parsed()) {
@@ -988,18 +1036,50 @@ int main(int argc, char** argv) {
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       const eval::Suite suite = eval::loadSuite(reg_suite);
       if (!reg_write.empty() && !reg_baseline.empty()) throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
-      if (reg_write.empty() && reg_baseline.empty()) throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");
-      const fs::path work = reg_out.empty() ? fs::path("out") / ("regress-" + suite.name) : reg_out;
-      std::map<std::string, std::map<std::string, double>> results;
-      for (const auto& sc : suite.scenarios) {
-        std::cerr << "regress: " << sc.id() << " ...\n";
-        results[sc.id()] = eval::flattenMetrics(
-            runScenario(sc.type, sc.seed, sc.frames, run_sim, pipe_cfg, work / sc.id(), true, true, {}));
+      const bool sharded = !reg_shard.empty();
+      if (sharded && !reg_write.empty()) throw io::InputError("--shard never writes a baseline: merge the shards with --merge and --write-baseline");
+      if (!sharded && reg_write.empty() && reg_baseline.empty()) throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");
+      const eval::Shard shard = sharded ? eval::parseShard(reg_shard) : eval::Shard{};
+      const eval::Suite part = eval::shardOf(suite, shard);
+      const fs::path work = reg_out.empty() ? fs::path("out") / ("regress-" + suite.name + (sharded ? "-shard" + std::to_string(shard.k) : ""))
+                                            : reg_out;
+      // refused before the suite runs, not after
+      if (!reg_write.empty() && fs::exists(reg_write) && !reg_force) {
+        throw io::InputError(reg_write.string() + ": exists (pass --force to replace it)");
       }
+      if (!reg_out.empty() && fs::is_directory(reg_out) && !fs::is_empty(reg_out) && !reg_force) {
+        throw io::InputError(reg_out.string() + ": directory exists and is not empty (pass --force to replace what the suite writes there)");
+      }
+      // on a cluster node, the cores Slurm gave the task, not every core of the node
+      if (const char* cpus = std::getenv("SLURM_CPUS_PER_TASK"); cpus && run_sim.threads == 0) {
+        const int n = std::atoi(cpus);
+        if (n > 0) run_sim.threads = n;
+      }
+      eval::Results results;
+      if (sharded) {
+        // the shard's identity first, its results last: a shard that fails leaves no results to merge
+        fs::create_directories(work);
+        std::error_code ec;
+        fs::remove(work / "suite_results.json", ec);
+        io::writeFileAtomic(work / "shard.json", eval::shardJson(suite, shard), true);
+      }
+      if (!reg_merge.empty()) {
+        results = eval::mergeShards(suite, reg_merge);
+        std::cerr << "regress: merged " << reg_merge.size() << " shards, " << results.size() << " scenarios\n";
+      } else {
+        int done = 0;
+        for (const auto& sc : part.scenarios) {
+          app::throwIfInterrupted();
+          std::cerr << "regress: " << sc.id() << " (" << ++done << "/" << part.scenarios.size() << ") ...\n";
+          results[sc.id()] = eval::flattenMetrics(
+              runScenario(sc.type, sc.seed, sc.frames, run_sim, pipe_cfg, work / sc.id(), true, true, {}));
+        }
+      }
+      fs::create_directories(work);
       // every metric of every scenario, and a summary table beside the per-scenario reports
       nlohmann::json all = results;
       io::writeFileAtomic(work / "suite_results.json", all.dump(1) + "\n", true);
-      io::writeFileAtomic(work / "suite_summary.html", eval::suiteSummaryHtml(suite, results), true);
+      io::writeFileAtomic(work / "suite_summary.html", eval::suiteSummaryHtml(part, results), true);
       std::cerr << "regress: all metrics in " << (work / "suite_results.json").string() << ", summary in "
                 << (work / "suite_summary.html").string() << "\n";
       if (!reg_write.empty()) {
@@ -1007,13 +1087,21 @@ int main(int argc, char** argv) {
         std::cout << "wrote baseline " << reg_write.string() << " for " << results.size() << " scenarios\n";
         return 0;
       }
-      const eval::RegressionResult res = eval::compare(suite, eval::loadBaseline(reg_baseline), results);
+      if (reg_baseline.empty()) return 0;  // a shard without a baseline: its results are all it writes
+      const eval::RegressionResult res = eval::compare(part, eval::loadBaseline(reg_baseline), results);
       eval::printTable(std::cout, res);
       if (!reg_junit.empty()) io::writeFileAtomic(reg_junit, eval::junitXml(suite, res), true);
       return res.regressions > 0 ? 1 : 0;
     }
+  } catch (const app::Interrupted& e) {
+    std::cerr << "\nterrain: " << e.what() << ": stopped; the output directory was left as it was\n";
+    return e.exitCode();
   } catch (const io::InputError& e) {
     std::cerr << "terrain: error: " << e.what() << "\n";
+    return 2;
+  } catch (const fs::filesystem_error& e) {
+    // a path that cannot be read or written (permissions, a full disk, a file where a folder should be)
+    std::cerr << "terrain: error: " << e.path1().string() << ": " << e.code().message() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "terrain: internal error: " << e.what() << "\n";

@@ -3,13 +3,16 @@
 #include "app/pipeline_config_io.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
+#include "scenes/scene_truth.hpp"
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <map>
 #include <type_traits>
 
 namespace terrain::app {
@@ -137,6 +140,30 @@ std::string cameraName(int frame, const std::string& camera, const char* what) {
 
 }  // namespace
 
+namespace {
+
+// the scene's files (the MJCF, its truth sidecar, its heightfield when there is one) and a 64-bit
+// FNV-1a digest of each: 'evaluate' refuses to score a run against a scene changed since
+std::map<std::string, std::string> sceneDigests(const fs::path& scene) {
+  std::map<std::string, std::string> out;
+  fs::path hfield = scene;
+  hfield.replace_extension(".hfield");
+  for (const fs::path& f : {scene, scenes::truthPathFor(scene), hfield}) {
+    if (!fs::exists(f)) continue;
+    std::uint64_t h = 1469598103934665603ull;
+    for (const char c : io::readFile(f)) {
+      h ^= static_cast<unsigned char>(c);
+      h *= 1099511628211ull;
+    }
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    out[f.filename().string()] = hex;
+  }
+  return out;
+}
+
+}  // namespace
+
 void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::RunTruth& truth, const fs::path& scene) {
   const fs::path dir = out / "state";
   fs::create_directories(dir / "cameras");
@@ -197,6 +224,7 @@ void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::Ru
   const fs::path rel = abs_scene.lexically_relative(abs_out);
   j["scene"] = (!rel.empty() && *rel.begin() != "..") ? rel.string() : abs_scene.string();
   j["scene_relative_to_run"] = !rel.empty() && *rel.begin() != "..";
+  j["scene_files"] = sceneDigests(scene);
   j["frames"] = pipeline.records().size();
   j["voxels"] = pipeline.map().size();
   j["calibration"] = nlohmann::json::parse(rig::calibrationToJson(pipeline.calibration()));
@@ -228,6 +256,19 @@ SavedRun readRunState(const fs::path& out) {
   SavedRun run;
   run.scene = j["scene"].get<std::string>();
   if (j.value("scene_relative_to_run", false)) run.scene = out / run.scene;
+  // the scene must be the one the run ran in (states written before digests were kept have none)
+  if (j.contains("scene_files") && j["scene_files"].is_object() && fs::exists(run.scene)) {
+    const auto now = sceneDigests(run.scene);
+    for (auto it = j["scene_files"].begin(); it != j["scene_files"].end(); ++it) {
+      const fs::path file = run.scene.parent_path() / it.key();
+      const auto found = now.find(it.key());
+      if (found == now.end()) throw io::InputError(file.string() + ": the run's scene file is no longer there");
+      if (!it.value().is_string() || found->second != it.value().get<std::string>()) {
+        throw io::InputError(file.string() + ": changed since the run (it no longer matches what " + state_file.string() +
+                             " recorded); run again to score the new scene");
+      }
+    }
+  }
   const RigCalibration calibration = rig::calibrationFromJson(j["calibration"].dump(), state_file.string() + " (calibration)");
   PipelineConfig config;
   loadPipelineConfig(dir / "pipeline_config.json", config);

@@ -5,8 +5,10 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 namespace terrain::eval {
@@ -94,7 +96,97 @@ Results loadBaseline(const fs::path& path) {
   return r;
 }
 
+Shard parseShard(const std::string& text) {
+  Shard s;
+  char slash = 0;
+  std::istringstream in(text);
+  if (!(in >> s.k >> slash >> s.n) || slash != '/' || !in.eof() || s.k < 1 || s.n < 1 || s.k > s.n || s.n > 10000) {
+    throw io::InputError("--shard '" + text + "': expected K/N with 1 <= K <= N (for example 2/8)");
+  }
+  return s;
+}
+
+Suite shardOf(const Suite& suite, Shard shard) {
+  Suite part = suite;
+  part.scenarios.clear();
+  for (std::size_t i = static_cast<std::size_t>(shard.k - 1); i < suite.scenarios.size(); i += static_cast<std::size_t>(shard.n)) {
+    part.scenarios.push_back(suite.scenarios[i]);
+  }
+  return part;
+}
+
+std::string shardJson(const Suite& suite, Shard shard) {
+  nlohmann::json j;
+  j["suite"] = suite.name;
+  j["shard"] = shard.k;
+  j["of"] = shard.n;
+  j["scenarios"] = nlohmann::json::array();
+  for (const auto& sc : shardOf(suite, shard).scenarios) j["scenarios"].push_back(sc.id());
+  return j.dump(1) + "\n";
+}
+
+Results mergeShards(const Suite& suite, const std::vector<fs::path>& dirs) {
+  Results all;
+  std::map<int, fs::path> seen;  // part -> directory
+  int n = 0;
+  for (const fs::path& dir : dirs) {
+    nlohmann::json shard;
+    Results part;
+    try {
+      if (!fs::exists(dir / "shard.json")) throw io::InputError((dir / "shard.json").string() + ": missing (not a shard's output)");
+      shard = nlohmann::json::parse(io::readFile(dir / "shard.json"));
+      if (!fs::exists(dir / "suite_results.json")) {
+        throw io::InputError((dir / "suite_results.json").string() + ": missing: shard " + std::to_string(shard.value("shard", 0)) +
+                             " did not finish");
+      }
+      const nlohmann::json r = nlohmann::json::parse(io::readFile(dir / "suite_results.json"));
+      for (auto sc = r.begin(); sc != r.end(); ++sc) {
+        for (auto m = sc.value().begin(); m != sc.value().end(); ++m) part[sc.key()][m.key()] = m.value().get<double>();
+      }
+      if (shard.at("suite").get<std::string>() != suite.name) {
+        throw io::InputError((dir / "shard.json").string() + ": a shard of suite '" + shard.at("suite").get<std::string>() +
+                             "', not '" + suite.name + "'");
+      }
+    } catch (const nlohmann::json::exception& e) {
+      throw io::InputError(dir.string() + ": not a shard's output (" + e.what() + ")");
+    }
+    const Shard s{shard.value("shard", 0), shard.value("of", 0)};
+    if (n == 0) n = s.n;
+    if (s.n != n || s.k < 1 || s.k > s.n) {
+      throw io::InputError((dir / "shard.json").string() + ": part " + std::to_string(s.k) + " of " + std::to_string(s.n) +
+                           ", but the other shards split the suite in " + std::to_string(n));
+    }
+    if (const auto it = seen.find(s.k); it != seen.end()) {
+      throw io::InputError(dir.string() + ": shard " + std::to_string(s.k) + "/" + std::to_string(n) + " is given twice (also " +
+                           it->second.string() + ")");
+    }
+    seen[s.k] = dir;
+    for (const auto& sc : shardOf(suite, s).scenarios) {
+      const auto r = part.find(sc.id());
+      if (r == part.end()) throw io::InputError(dir.string() + ": shard " + std::to_string(s.k) + " has no results for " + sc.id());
+      all[sc.id()] = r->second;
+    }
+  }
+  for (int k = 1; k <= n; ++k) {
+    if (!seen.count(k)) throw io::InputError("shard " + std::to_string(k) + "/" + std::to_string(n) + " is missing from --merge");
+  }
+  if (dirs.empty()) throw io::InputError("--merge needs the shards' output directories");
+  return all;
+}
+
 void writeBaseline(const fs::path& path, const Suite& suite, const Results& results, bool force) {
+  // a metric no scenario reports is misspelled (or gone from the report): refused, not written as nothing
+  for (const auto& m : suite.metrics) {
+    for (const std::string* field : {&m.name, &m.count}) {
+      if (field->empty()) continue;
+      const bool anywhere = std::any_of(results.begin(), results.end(), [&](const auto& r) { return r.second.count(*field) > 0; });
+      if (!anywhere) {
+        throw io::InputError("suite " + suite.name + ": metric '" + *field + "' is in no scenario's report (" +
+                             std::to_string(results.size()) + " scenarios); check its name against report.json" +
+                             " (flattened with dots, e.g. ground_segmentation.gmrf_icm.f1); no baseline written");
+      }
+    }
+  }
   nlohmann::json j;
   j["suite"] = suite.name;
   j["note"] = "written by 'terrain regress --write-baseline'; guarded metrics only";

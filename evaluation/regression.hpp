@@ -42,6 +42,23 @@ using Results = std::map<std::string, std::map<std::string, double>>;  // scenar
 
 // Reads and writes baselines (JSON); writing refuses to replace a file unless force.
 Results loadBaseline(const std::filesystem::path& path);
+
+// Shards: part k of n (1-based) holds every n-th scenario from the k-th, in suite order, so every
+// scenario is in exactly one part and the split is the same for the same suite.
+struct Shard {
+  int k = 1, n = 1;
+};
+// Reads "K/N" (1 <= K <= N <= 10000); throws io::InputError naming the text otherwise.
+Shard parseShard(const std::string& text);
+Suite shardOf(const Suite& suite, Shard shard);
+// What a shard's run leaves beside its suite_results.json (DIR/shard.json): the suite, K, N and
+// its scenarios.
+std::string shardJson(const Suite& suite, Shard shard);
+// The results of a whole suite from the directories of its shards' runs. Throws io::InputError
+// naming the directory for a shard that is missing or failed (no shard.json or suite_results.json,
+// or a scenario of its part without results), one of another suite or split, and a part given twice.
+Results mergeShards(const Suite& suite, const std::vector<std::filesystem::path>& dirs);
+
 void writeBaseline(const std::filesystem::path& path, const Suite& suite, const Results& results, bool force);
 
 struct Comparison {

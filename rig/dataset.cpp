@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <sstream>
 
 namespace terrain::rig {
@@ -69,7 +70,7 @@ cv::Mat readImage(const fs::path& path, int flags, int expected_type) {
 }
 
 // splits CSV text into rows of numbers after a header line; names file and line on error
-std::vector<std::vector<double>> readCsv(const fs::path& path, std::size_t columns) {
+std::vector<std::vector<double>> readCsv(const fs::path& path, std::size_t columns, std::vector<int>* lines = nullptr) {
   std::istringstream in(io::readFile(path));
   std::string line;
   std::getline(in, line);  // header
@@ -95,6 +96,25 @@ std::vector<std::vector<double>> readCsv(const fs::path& path, std::size_t colum
                            " columns, found " + std::to_string(row.size()));
     }
     rows.push_back(std::move(row));
+    if (lines) lines->push_back(line_no);
+  }
+  return rows;
+}
+
+// the rows of a sensor or truth stream: every value finite, times increasing, and what `check`
+// says about each row (an empty string: fine), each failure named with the file and line
+std::vector<std::vector<double>> readStream(const fs::path& path, std::size_t columns,
+                                            const std::function<std::string(const std::vector<double>&)>& check) {
+  std::vector<int> lines;
+  auto rows = readCsv(path, columns, &lines);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto where = [&] { return path.string() + ":" + std::to_string(lines[i]) + ": "; };
+    for (double v : rows[i]) {
+      if (!std::isfinite(v)) throw io::InputError(where() + "a value is not finite (" + std::to_string(v) + ")");
+    }
+    if (i > 0 && rows[i][0] <= rows[i - 1][0]) throw io::InputError(where() + "time does not increase from the row before");
+    const std::string problem = check(rows[i]);
+    if (!problem.empty()) throw io::InputError(where() + problem);
   }
   return rows;
 }
@@ -365,10 +385,23 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
     throw io::InputError(manifest_path.string() + ": declares " + std::to_string(declared) + " frames, frames.csv has " +
                          std::to_string(frames_.size()));
   }
-  for (const auto& r : readCsv(dir_ / "gps.csv", 5)) gps_.push_back({r[0], r[1], r[2], r[3], r[4]});
-  for (const auto& r : readCsv(dir_ / "gyro.csv", 4)) gyro_.push_back({r[0], Vector3(r[1], r[2], r[3])});
+  const auto gps_row = [](const std::vector<double>& r) -> std::string {
+    if (std::abs(r[1]) > 90 || std::abs(r[2]) > 180) return "latitude/longitude outside [-90, 90] / [-180, 180] deg";
+    if (std::abs(r[3]) > 1e5) return "altitude beyond 100 km";
+    if (r[4] < 0) return "sigma_m is negative";
+    return {};
+  };
+  for (const auto& r : readStream(dir_ / "gps.csv", 5, gps_row)) gps_.push_back({r[0], r[1], r[2], r[3], r[4]});
+  for (const auto& r : readStream(dir_ / "gyro.csv", 4, [](const auto&) { return std::string(); })) {
+    gyro_.push_back({r[0], Vector3(r[1], r[2], r[3])});
+  }
   if (has_truth_) {
-    for (const auto& r : readCsv(dir_ / "poses_gt.csv", 8)) {
+    const auto pose_row = [](const std::vector<double>& r) -> std::string {
+      const double norm = Eigen::Vector4d(r[4], r[5], r[6], r[7]).norm();
+      if (std::abs(norm - 1.0) > 1e-3) return "the quaternion qw qx qy qz has norm " + std::to_string(norm) + ", not 1";
+      return {};
+    };
+    for (const auto& r : readStream(dir_ / "poses_gt.csv", 8, pose_row)) {
       TimedPose p;
       p.time = r[0];
       p.world_from_vehicle = Pose::Identity();

@@ -16,7 +16,14 @@ void applySettings(const std::filesystem::path& path, const std::map<std::string
   }
   if (root.IsNull()) return;
   if (!root.IsMap()) throw InputError(path.string() + ": expected a map of sections (" + sections + ")");
+  std::map<std::string, int> seen;  // key -> line it was first given on (YAML keeps both of a repeated key)
   auto apply = [&](const std::string& key, const YAML::Node& value) {
+    const int line = value.Mark().line + 1;
+    const auto [first, fresh] = seen.emplace(key, line);
+    if (!fresh) {
+      throw InputError(path.string() + ":" + std::to_string(line) + ": '" + key + "' is given twice (first on line " +
+                       std::to_string(first->second) + ")");
+    }
     auto it = setters.find(key);
     if (it == setters.end()) {
       throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": unknown setting '" + key + "'");

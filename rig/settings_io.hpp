@@ -14,7 +14,7 @@ namespace terrain::io {
 using Setter = std::function<void(const YAML::Node&)>;
 
 // Applies every key of the file through its setter. Throws InputError naming the file and line for
-// invalid YAML, an unknown key or a value its setter refuses. `sections` names the expected sections
+// invalid YAML, an unknown key, a key given twice or a value its setter refuses. `sections` names the expected sections
 // for the message about a file that is not a map.
 void applySettings(const std::filesystem::path& path, const std::map<std::string, Setter>& setters,
                    const std::string& sections);

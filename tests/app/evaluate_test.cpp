@@ -57,6 +57,25 @@ TEST_F(EvaluateTest, WithoutBaselinesTheReportSaysSoAndScoresTheMethodAsBefore) 
   EXPECT_TRUE(fs::exists(lean / "report.html"));
 }
 
+TEST_F(EvaluateTest, ASceneChangedSinceTheRunIsRefused) {
+  // a copy of the run (its scene inside it) whose sidecar, then heightfield, is edited afterwards
+  for (const char* edited : {"forest_3.truth.json", "forest_3.hfield", "forest_3.xml"}) {
+    const fs::path copy = *dir_ / (std::string("changed_") + edited);
+    fs::copy(run(), copy, fs::copy_options::recursive);
+    const fs::path file = copy / "scene" / edited;
+    ASSERT_TRUE(fs::exists(file)) << file;
+    std::string bytes = io::readFile(file);
+    bytes[bytes.size() / 2] ^= 0x01;
+    std::ofstream(file, std::ios::binary) << bytes;
+    const fs::path err = *dir_ / "err.txt";
+    const int rc = sh(kCli + " evaluate --run " + copy.string() + " --out " + (copy / "again").string() + " > /dev/null 2> " +
+                      err.string());
+    EXPECT_EQ(WEXITSTATUS(rc), 2) << edited;
+    EXPECT_NE(io::readFile(err).find(std::string(edited) + ": changed since the run"), std::string::npos) << io::readFile(err);
+    EXPECT_FALSE(fs::exists(copy / "again" / "report.json"));
+  }
+}
+
 TEST_F(EvaluateTest, DamagedStateGetsAClearError) {
   // a copy of the run whose files are damaged one at a time
   const fs::path copy = *dir_ / "copy", log = *dir_ / "log";

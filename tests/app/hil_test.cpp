@@ -97,7 +97,9 @@ TEST_F(HilTest, SimulatedRigWithAStreamedLidarScoresLikeTheInProcessRun) {
     sh(kCli + " run --scenario urban --seed 1 --frames 8 --lidar udp:127.0.0.1:" + std::to_string(port) +
        " --lidar-idle-timeout 1 --out " + out.string() + " > " + log.string() + " 2>&1");
   });
-  const fs::path scene = out / "scene" / "urban_1.xml";
+  // the same scene as the run generates (same type and seed: byte-identical), for the sender
+  const fs::path scene = *dir_ / "sender_scene" / "urban_1.xml";
+  ASSERT_EQ(0, sh(kCli + " scenes generate --type urban --seed 1 --out " + scene.string() + " > /dev/null"));
   for (int i = 0; i < 600; ++i) {
     if (fs::exists(log) && io::readFile(log).find("listening") != std::string::npos) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));

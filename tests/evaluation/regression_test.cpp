@@ -4,8 +4,11 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <map>
 #include <sstream>
 
 namespace terrain::eval {
@@ -108,6 +111,16 @@ TEST(RegressionTest, BaselinesAndSuitesRoundTripAndJunitNamesFailures) {
   const Results r{{"flat_s1_f5", {{"f1", 0.95}, {"mae_m", 3.0}, {"unguarded", 7.0}}}};
   writeBaseline(dir / "b.json", s, r, false);
   EXPECT_THROW(writeBaseline(dir / "b.json", s, r, false), io::InputError);  // never replaced silently
+  // a metric no scenario reports (misspelled) is refused and nothing is written
+  Suite typo = s;
+  typo.metrics[0].name = "f1_typo";
+  try {
+    writeBaseline(dir / "typo.json", typo, r, false);
+    FAIL();
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("metric 'f1_typo' is in no scenario's report"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "typo.json"));
   const Results back = loadBaseline(dir / "b.json");
   EXPECT_EQ(back.at("flat_s1_f5").at("f1"), 0.95);
   EXPECT_EQ(back.at("flat_s1_f5").count("unguarded"), 0u);
@@ -125,6 +138,59 @@ TEST(RegressionTest, BaselinesAndSuitesRoundTripAndJunitNamesFailures) {
     FAIL();
   } catch (const io::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("better must be higher or lower"), std::string::npos) << e.what();
+  }
+}
+
+// Shards split a suite into disjoint parts that together are the suite; merging their outputs gives
+// the whole suite's results, and a missing, failed, foreign or doubled shard is named.
+TEST(RegressionTest, ShardsSplitTheSuiteAndMergeBackOrSayWhatIsMissing) {
+  Suite s;
+  s.name = "sweep";
+  for (int seed = 1; seed <= 7; ++seed) s.scenarios.push_back({"flat", static_cast<std::uint64_t>(seed), 4});
+  std::map<std::string, int> owner;
+  for (int k = 1; k <= 3; ++k) {
+    for (const auto& sc : shardOf(s, {k, 3}).scenarios) EXPECT_TRUE(owner.emplace(sc.id(), k).second) << sc.id();
+  }
+  EXPECT_EQ(owner.size(), 7u);  // every scenario in exactly one part
+  EXPECT_EQ(shardOf(s, {1, 3}).scenarios.size(), 3u);
+  EXPECT_EQ(shardOf(s, {3, 3}).scenarios.size(), 2u);
+  EXPECT_EQ(parseShard("2/8").k, 2);
+  for (const char* bad : {"0/3", "4/3", "3", "a/b", "1/3x", "-1/2"}) EXPECT_THROW(parseShard(bad), io::InputError) << bad;
+
+  // each shard's output as a shard run leaves it
+  test::TempDir dir;
+  const auto writeShard = [&](int k, const std::string& name, bool finished) {
+    const auto d = dir / name;
+    std::filesystem::create_directories(d);
+    io::writeFileAtomic(d / "shard.json", shardJson(s, {k, 3}), true);
+    nlohmann::json r;
+    for (const auto& sc : shardOf(s, {k, 3}).scenarios) r[sc.id()]["f1"] = 0.9 + 0.01 * static_cast<double>(sc.seed);
+    if (finished) io::writeFileAtomic(d / "suite_results.json", r.dump(), true);
+    return d;
+  };
+  const auto a = writeShard(1, "a", true), b = writeShard(2, "b", true), c = writeShard(3, "c", true);
+  const Results merged = mergeShards(s, {c, a, b});
+  ASSERT_EQ(merged.size(), 7u);
+  EXPECT_DOUBLE_EQ(merged.at("flat_s5_f4").at("f1"), 0.95);
+  const auto refused = [&](const std::vector<std::filesystem::path>& dirs, const std::string& message) {
+    try {
+      mergeShards(s, dirs);
+      ADD_FAILURE() << "merged: " << message;
+    } catch (const io::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  refused({a, b}, "shard 3/3 is missing from --merge");
+  refused({a, b, c, a}, "shard 1/3 is given twice");
+  refused({a, b, writeShard(3, "failed", false)}, "did not finish");
+  refused({a, b, dir / "nowhere"}, "shard.json: missing");
+  Suite other = s;
+  other.name = "other";
+  try {
+    mergeShards(other, {a, b, c});
+    ADD_FAILURE() << "a shard of another suite was merged";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("a shard of suite 'sweep', not 'other'"), std::string::npos) << e.what();
   }
 }
 

@@ -62,6 +62,35 @@ TEST(DatasetTest, MalformedCsvIsNamedWithItsLine) {
   } catch (const io::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("gps.csv:3"), std::string::npos) << e.what();
   }
+  // rows that parse but cannot be: each named with its file and line
+  const auto refused = [&](const char* file, const std::string& rows, const std::string& message) {
+    const std::string header = std::string(file) == "gps.csv" ? "time_s,lat,lon,alt,sigma\n" : "time_s,wx,wy,wz\n";
+    io::writeFileAtomic(dir / "ds" / file, header + rows, true);
+    try {
+      DatasetSource s(dir / "ds");
+      ADD_FAILURE() << file << " " << rows << " was accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+    io::writeFileAtomic(dir / "ds" / file, header, true);
+  };
+  refused("gps.csv", "1,47,8,400,2\n2,nan,8,400,2\n", "gps.csv:3: a value is not finite");
+  refused("gps.csv", "1,47,8,400,2\n1,47,8,400,2\n", "gps.csv:3: time does not increase");
+  refused("gps.csv", "1,97,8,400,2\n", "gps.csv:2: latitude/longitude outside");
+  refused("gps.csv", "1,47,8,400,-2\n", "sigma_m is negative");
+  refused("gyro.csv", "0.1,0,0,inf\n", "gyro.csv:2: a value is not finite");
+  // a dataset with ground truth: a true pose whose quaternion is not a rotation
+  auto manifest = nlohmann::json::parse(io::readFile(dir / "ds" / "manifest.json"));
+  manifest["ground_truth"] = true;
+  io::writeFileAtomic(dir / "ds" / "manifest.json", manifest.dump(1), true);
+  io::writeFileAtomic(dir / "ds" / "poses_gt.csv", "time_s,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n0.1,0,0,0,0.5,0,0,0\n", true);
+  try {
+    DatasetSource s(dir / "ds");
+    ADD_FAILURE() << "a quaternion of norm 0.5 was accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("poses_gt.csv:3: the quaternion qw qx qy qz has norm 0.5"), std::string::npos)
+        << e.what();
+  }
 }
 
 // a laser table of 16 lasers, enough for a dataset to load

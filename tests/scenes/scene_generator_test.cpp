@@ -5,8 +5,10 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <functional>
 
 namespace terrain::scenes {
 namespace {
@@ -107,6 +109,38 @@ TEST(SceneGeneratorTest, RefusesUnknownTypesAndOverwrites) {
   const std::string before = io::readFile(dir / "u.xml");
   EXPECT_THROW(writeScene(generateScene(SceneConfig{"flat", 1}), dir / "u.xml", false), io::InputError);
   EXPECT_EQ(io::readFile(dir / "u.xml"), before);
+}
+
+// A sidecar that is wrong in any of these ways is refused with the file and the field named.
+TEST(SceneTruthTest, WrongSidecarsAreRefusedWithTheField) {
+  test::TempDir dir;
+  const std::string good = truthToJson(generateScene(SceneConfig{"urban", 1}).truth);
+  io::writeFileAtomic(dir / "good.truth.json", good, false);
+  ASSERT_NO_THROW(loadTruth(dir / "good.truth.json"));
+  const auto refused = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit, const std::string& message) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    edit(j);
+    const fs::path f = dir / (name + ".truth.json");
+    io::writeFileAtomic(f, j.dump(1), true);
+    try {
+      loadTruth(f);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(f.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << name << ": " << e.what();
+    }
+  };
+  refused("unknown_top", [](auto& j) { j["colour"] = "red"; }, "field 'colour' is not a field here");
+  refused("unknown_object_field", [](auto& j) { j["objects"][0]["heigth"] = 3; }, "field 'objects[0].heigth' is not a field here");
+  refused("two_point_footprint", [](auto& j) { j["objects"][0]["footprint"] = {{0, 0}, {1, 1}}; },
+          "objects[0].footprint' needs at least 3 points");
+  refused("duplicate_id", [](auto& j) { j["objects"][1]["id"] = j["objects"][0]["id"]; }, "is the id of an earlier object too");
+  refused("geom_twice", [](auto& j) { j["objects"][1]["geoms"].push_back(j["objects"][0]["geoms"][0]); },
+          "belongs to object");
+  refused("geom_not_a_name", [](auto& j) { j["objects"][0]["geoms"] = {7}; }, "must hold geom names");
+  refused("repeated_waypoint", [](auto& j) { j["path"]["waypoints"][1] = j["path"]["waypoints"][0]; },
+          "are the same (a segment of length 0)");
+  refused("terrain_pos_text", [](auto& j) { j["terrain"]["pos"] = {0, "up", 0}; }, "terrain.pos' must hold finite numbers");
 }
 
 TEST(WorldTest, MalformedScenesGetMuJoCosMessageWithTheLine) {

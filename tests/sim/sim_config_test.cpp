@@ -121,6 +121,11 @@ TEST(SimConfigTest, BadFilesAreNamedWithTheLineAndField) {
             std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar:\n  max_range: -1\n").find("lidar.max_range"), std::string::npos);
   EXPECT_EQ(errorOf(dir, "# all defaults\n"), "");
+  // a key given twice (YAML keeps both; which one counts would be a guess)
+  EXPECT_NE(errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n").find("sim.yaml:3: 'robot.speed' is given twice (first on line 2)"),
+            std::string::npos)
+      << errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n");
+  EXPECT_NE(errorOf(dir, "seed: 1\nrobot:\n  speed: 1\nseed: 2\n").find("'seed' is given twice"), std::string::npos);
 }
 
 }  // namespace
