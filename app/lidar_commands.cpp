@@ -51,7 +51,7 @@ nlohmann::json captureJson(const rig::CaptureScan& scan) {
                            {"no_sentence", p.no_sentence}, {"bad_sentence", p.bad_sentence}, {"unreadable", p.unreadable},
                            {"first_problem", p.first_problem}};
   const auto& r = scan.read;
-  j["capture"] = {{"frames", r.frames},       {"lidar_datagrams", r.payloads}, {"other_traffic", r.other},
+  j["capture"] = {{"frames", r.frames},       {"sensor_datagrams", r.payloads}, {"other_traffic", r.other},
                   {"ip_fragments", r.fragments}, {"malformed", r.malformed},   {"cut_off", r.error}};
   j["time_base_s"] = scan.time_base;
   j["time_base_source"] = scan.time_base_source;

@@ -310,15 +310,9 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
                            const sim::World* world, const eval::EvaluationOptions& scoring, bool quiet = false) {
   Pipeline pipeline(source.calibration(), config);
   eval::RunTruth truth(config.voxel_map.voxel_size);
-  // boundary images go into out/boundaries. If the input fails before the last frame, the run
-  // removes that folder again (when it made it): out is left as it was found, and the same --out
-  // can be given once the input is mended.
+  // boundary images go into out/boundaries (out is the staged directory of the command: a run
+  // that fails leaves nothing of it)
   const fs::path boundary_dir = out / "boundaries";
-  const bool had_boundary_dir = fs::exists(boundary_dir);
-  const auto dropBoundaryImages = [&] {
-    std::error_code ec;
-    if (!had_boundary_dir) fs::remove_all(boundary_dir, ec);
-  };
   {
     // made before the sensing starts: a folder that cannot be made ends the run with its reason
     std::error_code ec;
@@ -367,15 +361,11 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   } catch (...) {
     queue.close();
     sensing.join();
-    dropBoundaryImages();
     throw;
   }
   sensing.join();
   progress.finish();
-  if (sensing_error) {
-    dropBoundaryImages();
-    std::rethrow_exception(sensing_error);
-  }
+  if (sensing_error) std::rethrow_exception(sensing_error);
   app::throwIfInterrupted();
   pipeline.finish();
   app::throwIfInterrupted();

@@ -1,5 +1,6 @@
 #include "app/outputs.hpp"
 
+#include "app/gltf.hpp"
 #include "rig/file_io.hpp"
 
 #include <nlohmann/json.hpp>
@@ -37,6 +38,7 @@ std::array<std::uint8_t, 3> vertexColour(const Pipeline& p, const MeshVertex& m)
 struct OutputMesh {
   std::vector<CellIndex> cells;
   std::vector<float> heights;
+  std::vector<float> sensed;  // sensed height; NaN for an inferred roof (nothing sensed there)
   std::vector<std::array<std::uint8_t, 3>> colours;
   std::vector<std::uint8_t> unseen, recovered, inferred;
   std::vector<std::array<std::uint32_t, 3>> triangles;
@@ -48,20 +50,21 @@ OutputMesh outputMesh(const Pipeline& p) {
   auto key = [](const CellIndex& c) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
   };
-  auto add = [&](const CellIndex& c, float h, std::array<std::uint8_t, 3> colour, bool unseen, bool recovered,
+  auto add = [&](const CellIndex& c, float h, float sensed, std::array<std::uint8_t, 3> colour, bool unseen, bool recovered,
                  bool inferred) {
     index.emplace(key(c), static_cast<std::uint32_t>(out.cells.size()));
     out.cells.push_back(c);
     out.heights.push_back(h);
+    out.sensed.push_back(sensed);
     out.colours.push_back(colour);
     out.unseen.push_back(unseen);
     out.recovered.push_back(recovered);
     out.inferred.push_back(inferred);
   };
   for (const auto& m : p.mesh().vertices()) {
-    add(m.cell, m.height(), vertexColour(p, m), !p.map().voxels()[m.top_voxel].coloured, m.raised(), false);
+    add(m.cell, m.height(), m.sensed_height, vertexColour(p, m), !p.map().voxels()[m.top_voxel].coloured, m.raised(), false);
   }
-  for (const auto& r : p.roofCells()) add(r.cell, r.height, {255, 220, 0}, true, true, true);
+  for (const auto& r : p.roofCells()) add(r.cell, r.height, std::nanf(""), {255, 220, 0}, true, true, true);
   out.triangles = gridTriangles(out.cells, [&](const CellIndex& c) -> std::int64_t {
     const auto it = index.find(key(c));
     return it == index.end() ? -1 : static_cast<std::int64_t>(it->second);
@@ -257,10 +260,30 @@ void writeBoundaryImages(const fs::path& dir, int frame, const std::string& came
   }
 }
 
+// mesh.glb (after recovery) and mesh_before.glb (the sensed heights; the inferred roofs left out)
+void writeGlbs(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
+  const double cell = p.map().voxelSize();
+  for (const bool before : {false, true}) {
+    GlbMesh g;
+    g.name = before ? "terrain, sensed only" : "terrain after recovery";
+    for (std::size_t i = 0; i < mesh.cells.size(); ++i) {
+      const float h = before ? mesh.sensed[i] : mesh.heights[i];
+      g.positions.emplace_back((mesh.cells[i].x() + 0.5) * cell, (mesh.cells[i].y() + 0.5) * cell, std::isnan(h) ? 0.0 : h);
+      g.colours.push_back(mesh.colours[i]);
+    }
+    for (const auto& t : mesh.triangles) {
+      if (before && (std::isnan(mesh.sensed[t[0]]) || std::isnan(mesh.sensed[t[1]]) || std::isnan(mesh.sensed[t[2]]))) continue;
+      g.triangles.push_back(t);
+    }
+    io::writeFileAtomic(dir / (before ? "mesh_before.glb" : "mesh.glb"), encodeGlb(g), true);
+  }
+}
+
 void writeReconstruction(const fs::path& dir, const Pipeline& p) {
   const OutputMesh mesh = outputMesh(p);
   writePly(dir / "mesh.ply", p, mesh);
   writeObj(dir, p, mesh);
+  writeGlbs(dir, p, mesh);
   writeVoxelPcd(dir / "voxels.pcd", p);
   writeTiming(dir, p);
   // height maps before and after recovery, on one colour scale; the roofs of completed footprints

@@ -63,7 +63,11 @@ void prepareOutputDir(const fs::path& dir, bool force) {
   }
 }
 
-StagedDirectory::StagedDirectory(fs::path target, bool force) : target_(std::move(target)), force_(force) {
+StagedDirectory::StagedDirectory(fs::path target, bool force) : force_(force) {
+  // an absolute, normal form: "out/", "./out" and "." name their directory, not a child of it
+  target_ = fs::absolute(target).lexically_normal();
+  if (target_.filename().empty()) target_ = target_.parent_path();
+  if (target_ == target_.root_path()) throw InputError(target.string() + ": cannot replace the root directory");
   std::error_code ec;
   if (fs::exists(target_, ec)) {
     if (!fs::is_directory(target_, ec)) throw InputError(target_.string() + ": exists and is not a directory");
@@ -71,9 +75,7 @@ StagedDirectory::StagedDirectory(fs::path target, bool force) : target_(std::mov
       throw InputError(target_.string() + ": directory exists and is not empty (pass --force to replace it)");
     }
   }
-  fs::path name = target_.filename().empty() ? target_.parent_path().filename() : target_.filename();
-  fs::path parent = target_.filename().empty() ? target_.parent_path().parent_path() : target_.parent_path();
-  partial_ = parent / (name.string() + ".partial-" + std::to_string(::getpid()));
+  partial_ = target_.parent_path() / (target_.filename().string() + ".partial-" + std::to_string(::getpid()));
   fs::remove_all(partial_, ec);
   fs::create_directories(partial_, ec);
   if (ec) throw InputError(partial_.string() + ": cannot create directory (" + ec.message() + ")");

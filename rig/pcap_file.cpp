@@ -53,7 +53,7 @@ struct Writer::Handle {
 
 std::string ReadStats::summary() const {
   std::ostringstream s;
-  s << frames << " captured frames, " << payloads << " to the lidar port";
+  s << frames << " captured frames, " << payloads << " sensor datagrams";
   if (other > 0) s << ", " << other << " other traffic";
   if (fragments > 0) s << ", " << fragments << " IP fragments";
   if (malformed > 0) s << ", " << malformed << " malformed";

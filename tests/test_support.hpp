@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the tests: scratch directories and tiny inline worlds.
 
+#include "core/pipeline.hpp"
 #include "core/terrain_mesh.hpp"
 #include "core/voxel_map.hpp"
 #include "scenes/scene_truth.hpp"
@@ -119,6 +120,25 @@ inline scenes::SceneTruth wallTruth(double wall_x) {
 
 inline std::shared_ptr<sim::World> wallWorld(double wall_x) {
   return std::make_shared<sim::World>(wallScene(wall_x), wallTruth(wall_x));
+}
+
+// a pipeline holding two 3 x 3 patches of cells (0.2 m), `apart` cells apart along x
+inline std::unique_ptr<Pipeline> twoPatches(int apart) {
+  auto p = std::make_unique<Pipeline>(RigCalibration{}, PipelineConfig{});
+  std::vector<Voxel> voxels;
+  std::vector<MeshVertex> vertices;
+  for (const int x0 : {0, apart}) {
+    for (int x = x0; x < x0 + 3; ++x) {
+      for (int y = 0; y < 3; ++y)
+        addColumn(voxels, vertices, CellIndex(x, y), 5, 1.1f + 0.01f * y, VoxelLabel::Ground);
+    }
+  }
+  SegmentationResult seg;
+  seg.rough.assign(voxels.size(), 1);
+  seg.refined.assign(voxels.size(), 1);
+  seg.ground_height.assign(voxels.size(), 1.1f);
+  EXPECT_TRUE(p->restore(voxels, vertices, seg, {}));
+  return p;
 }
 
 }  // namespace terrain::test

@@ -15,29 +15,11 @@
 namespace terrain {
 namespace {
 
-// a pipeline holding two 3 x 3 patches of cells (0.2 m), `apart` cells apart along x
-std::unique_ptr<Pipeline> twoPatches(int apart) {
-  auto p = std::make_unique<Pipeline>(RigCalibration{}, PipelineConfig{});
-  std::vector<Voxel> voxels;
-  std::vector<MeshVertex> vertices;
-  for (const int x0 : {0, apart}) {
-    for (int x = x0; x < x0 + 3; ++x) {
-      for (int y = 0; y < 3; ++y)
-        test::addColumn(voxels, vertices, CellIndex(x, y), 5, 1.1f + 0.01f * y, VoxelLabel::Ground);
-    }
-  }
-  SegmentationResult seg;
-  seg.rough.assign(voxels.size(), 1);
-  seg.refined.assign(voxels.size(), 1);
-  seg.ground_height.assign(voxels.size(), 1.1f);
-  EXPECT_TRUE(p->restore(voxels, vertices, seg, {}));
-  return p;
-}
 
 TEST(OutputsTest, AMeshWiderThanTheImageLimitIsDrawnCoarserWithAWarning) {
   test::TempDir dir;
   // 2 km: 10,003 cells across, 3 cells a pixel
-  app::writeReconstruction(dir.path(), *twoPatches(10000));
+  app::writeReconstruction(dir.path(), *test::twoPatches(10000));
   const cv::Mat tex = cv::imread((dir / "mesh_texture.png").string(), cv::IMREAD_UNCHANGED);
   EXPECT_EQ(tex.cols, 3335);
   EXPECT_EQ(tex.rows, 1);
@@ -53,7 +35,7 @@ TEST(OutputsTest, AMeshWiderThanTheImageLimitIsDrawnCoarserWithAWarning) {
 
 TEST(OutputsTest, AMeshWithinTheImageLimitIsDrawnACellAPixel) {
   test::TempDir dir;
-  app::writeReconstruction(dir.path(), *twoPatches(100));
+  app::writeReconstruction(dir.path(), *test::twoPatches(100));
   const cv::Mat tex = cv::imread((dir / "mesh_texture.png").string(), cv::IMREAD_UNCHANGED);
   EXPECT_EQ(tex.cols, 103);
   EXPECT_EQ(tex.rows, 3);

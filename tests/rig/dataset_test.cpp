@@ -25,6 +25,33 @@ TEST(DatasetTest, NeverWritesIntoANonEmptyDirectoryWithoutForce) {
   EXPECT_FALSE(fs::exists(out / "calibration.json"));
 }
 
+// An output directory is built beside its target and replaces it whole, or not at all.
+TEST(StagedDirectoryTest, ReplacesTheTargetWholeOnlyOnCommit) {
+  test::TempDir dir;
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  io::writeFileAtomic(out / "old.txt", "old", false);
+  EXPECT_THROW(io::StagedDirectory(out, false), io::InputError);  // not empty, no force
+  {
+    io::StagedDirectory staged(out, true);
+    EXPECT_EQ(staged.path().parent_path(), fs::absolute(dir.path()).lexically_normal());
+    io::writeFileAtomic(staged.path() / "new.txt", "new", false);
+    EXPECT_EQ(io::readFile(out / "old.txt"), "old");  // untouched until commit
+  }  // dropped without commit: the partial directory goes, the target stays
+  EXPECT_EQ(io::readFile(out / "old.txt"), "old");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator{}), 1);
+  {
+    io::StagedDirectory staged(out.string() + "/", true);  // "out/" names out itself
+    io::writeFileAtomic(staged.path() / "new.txt", "new", false);
+    staged.commit();
+  }
+  EXPECT_EQ(io::readFile(out / "new.txt"), "new");
+  EXPECT_FALSE(fs::exists(out / "old.txt"));  // no old file survives
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator{}), 1);
+  io::writeFileAtomic(dir / "file", "x", false);
+  EXPECT_THROW(io::StagedDirectory(dir / "file", true), io::InputError);  // a file is not replaced
+}
+
 TEST(DatasetTest, AnUnfinishedRecordingDoesNotLoad) {
   test::TempDir dir;
   {
