@@ -32,27 +32,30 @@ void refuseCutOff(const std::string& file, const std::string& cut_off) {
   if (!cut_off.empty()) throw io::InputError(file + ": the capture is cut off (" + cut_off + "); --strict refuses it");
 }
 
-nlohmann::json captureJson(const rig::CaptureScan& scan) {
+nlohmann::json lidarCountersJson(const rig::velodyne::DecodeStats& d, const rig::PositionStats& p,
+                                 const rig::pcap::ReadStats& r) {
   nlohmann::json j;
-  j["file"] = scan.file.string();
-  j["model"] = scan.model ? nlohmann::json(rig::velodyne::modelName(*scan.model)) : nlohmann::json(nullptr);
-  j["calibration"] = scan.calibration;
-  j["return_mode_packets"] = {{"strongest", scan.packets_by_mode[0]}, {"last", scan.packets_by_mode[1]},
-                              {"dual", scan.packets_by_mode[2]}};
-  const auto& d = scan.decode;
   j["data_packets"] = {{"offered", d.packets},        {"decoded", d.accepted},         {"lost", d.lost},
                        {"rejected", d.rejected()},    {"wrong_size", d.wrong_size},    {"bad_block", d.bad_block},
                        {"bad_position", d.bad_position}, {"bad_timestamp", d.bad_timestamp},
                        {"duplicates", d.duplicates},  {"out_of_order", d.out_of_order}, {"dual", d.dual_packets}};
   j["points"] = d.points;
   j["second_returns"] = d.second_returns;
-  const auto& p = scan.position;
   j["position_packets"] = {{"packets", p.packets},         {"fixes", p.fixes},           {"no_fix", p.no_fix},
                            {"no_sentence", p.no_sentence}, {"bad_sentence", p.bad_sentence}, {"unreadable", p.unreadable},
                            {"first_problem", p.first_problem}};
-  const auto& r = scan.read;
   j["capture"] = {{"frames", r.frames},       {"sensor_datagrams", r.payloads}, {"other_traffic", r.other},
                   {"ip_fragments", r.fragments}, {"malformed", r.malformed},   {"cut_off", r.error}};
+  return j;
+}
+
+nlohmann::json captureJson(const rig::CaptureScan& scan) {
+  nlohmann::json j = lidarCountersJson(scan.decode, scan.position, scan.read);
+  j["file"] = scan.file.string();
+  j["model"] = scan.model ? nlohmann::json(rig::velodyne::modelName(*scan.model)) : nlohmann::json(nullptr);
+  j["calibration"] = scan.calibration;
+  j["return_mode_packets"] = {{"strongest", scan.packets_by_mode[0]}, {"last", scan.packets_by_mode[1]},
+                              {"dual", scan.packets_by_mode[2]}};
   j["time_base_s"] = scan.time_base;
   j["time_base_source"] = scan.time_base_source;
   j["first_firing_s"] = scan.first_time;

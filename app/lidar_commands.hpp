@@ -39,6 +39,10 @@ int runLidarCommands(const LidarCommands& commands);
 
 // A capture's scan as JSON (the content of --json and capture.json).
 nlohmann::json captureJson(const rig::CaptureScan& scan);
+// The decoder's, the position packets' and the capture reader's counters as JSON (part of the above,
+// and the 'lidar' object of report.json).
+nlohmann::json lidarCountersJson(const rig::velodyne::DecodeStats& decode, const rig::PositionStats& position,
+                                 const rig::pcap::ReadStats& read);
 
 // Throws io::InputError for a capture cut off (cut_off: the reader's reason) under --strict.
 void refuseCutOff(const std::string& file, const std::string& cut_off);

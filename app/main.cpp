@@ -420,10 +420,6 @@ void refuseInputInside(const fs::path& out, const fs::path& input, const std::st
   }
 }
 
-rig::velodyne::Model modelForLasers(const rig::VelodyneLidar& lidar) {
-  return rig::velodyne::modelForLasers(lidar.calibration().laserCount(), lidar.calibration().source);
-}
-
 // where the lidar comes from instead of the simulated rig or the dataset (--lidar, --calibration)
 struct LidarChoice {
   std::string endpoint;  // pcap:FILE or udp:HOST:PORT; empty: no replacement
@@ -437,16 +433,9 @@ struct LidarChoice {
 // the lidar's counters and warnings beside the run's own, in report.json and warnings.json
 void addLidarToOutputs(const fs::path& out, nlohmann::json& report, const rig::VelodyneLidar& lidar,
                        const std::string& cut_off, const std::vector<std::string>& notes) {
-  rig::CaptureScan counters;
-  counters.decode = lidar.stats();
-  counters.position = lidar.positionStats();
-  counters.read = lidar.captureStats();
-  counters.model = lidar.stats().accepted > 0 ? std::optional(modelForLasers(lidar)) : std::nullopt;
-  counters.calibration = lidar.calibration().source;
-  nlohmann::json j = app::captureJson(counters);
-  for (const char* k : {"sweeps", "gps_fixes", "warnings", "error", "first_firing_s", "last_firing_s", "duration_s",
-                        "rotation_hz", "return_mode_packets", "time_base_s", "time_base_source", "file"})
-    j.erase(k);
+  nlohmann::json j = app::lidarCountersJson(lidar.stats(), lidar.positionStats(), lidar.captureStats());
+  j["model"] = rig::velodyne::modelName(lidar.model());
+  j["calibration"] = lidar.calibration().source;
   std::vector<std::string> warnings = notes;
   if (!cut_off.empty()) warnings.push_back("lidar capture cut off (" + cut_off + "); everything before was decoded");
   const auto& d = lidar.stats();

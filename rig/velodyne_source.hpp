@@ -107,6 +107,7 @@ class VelodyneLidar {
   // decoder counters, and for a capture the reader's
   std::string summary() const;
   const LaserCalibration& calibration() const { return assembler_.calibration(); }
+  velodyne::Model model() const { return assembler_.model(); }
   // the bound UDP port of a live source (useful after binding port 0), 0 for a capture
   std::uint16_t port() const { return udp_ ? udp_->port() : 0; }
 
