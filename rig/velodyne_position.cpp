@@ -48,12 +48,14 @@ bool angle(const std::string& value, const std::string& hemisphere, double limit
   return std::abs(deg) <= limit;
 }
 
-// hhmmss(.sss) to seconds since midnight
+// hhmmss(.sss) to seconds since midnight: six digits, then nothing or a point and digits
 bool timeOfDay(const std::string& s, double& t) {
-  double v = 0;
-  if (s.size() < 6 || !toDouble(s, v)) return false;
+  const bool digits6 = s.size() >= 6 && s.find_first_not_of("0123456789") >= 6;
+  const bool fraction = s.size() == 6 || (s[6] == '.' && s.find_first_not_of("0123456789", 7) == std::string::npos);
+  if (!digits6 || !fraction) return false;
   const int hh = std::atoi(s.substr(0, 2).c_str()), mm = std::atoi(s.substr(2, 2).c_str());
-  const double ss = v - std::floor(v / 100.0) * 100.0;
+  double ss = 0;
+  if (!toDouble(s.substr(4), ss)) return false;
   if (hh > 23 || mm > 59 || ss >= 61.0) return false;
   t = hh * 3600.0 + mm * 60.0 + ss;
   return true;

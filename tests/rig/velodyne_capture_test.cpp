@@ -151,6 +151,12 @@ TEST(VelodyneCaptureTest, AKnownGprmcSentenceGivesItsFix) {
   const auto no_fix = velodyne::parseNmea("$GPRMC,123519,V,,,,,,,230394,,*" + std::string("00"), &why);
   EXPECT_FALSE(no_fix);  // the checksum of that sentence is not 00
   EXPECT_FALSE(velodyne::parseNmea("$GPXXX,1,2,3", &why));
+  // a time of day with a sign (found by scripts/fuzz) is no hhmmss
+  EXPECT_FALSE(velodyne::parseNmea("$GPGGA,-10760,38,,,,,,,-21520,,,", &why));
+  EXPECT_NE(why.find("is not hhmmss"), std::string::npos) << why;
+  EXPECT_FALSE(velodyne::parseNmea("$GPRMC,15555555555523519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W", &why));
+  EXPECT_NE(why.find("is not hhmmss"), std::string::npos) << why;
+  ASSERT_TRUE(velodyne::parseNmea("$GPRMC,123519.25,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W", &why)) << why;
   // our own sentences read back
   const auto ours = velodyne::parseNmea(velodyne::gprmcSentence(1767225600.0 + 75.5, -33.5, 151.25, 2.0), &why);
   ASSERT_TRUE(ours) << why;
