@@ -7,7 +7,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <fstream>
 
@@ -283,14 +282,12 @@ TEST(VelodyneCaptureTest, ALiveStreamWithoutAPacketIsAnErrorAfterTheFirstPacketT
   VelodyneOptions options;
   options.first_timeout = 0.3;
   VelodyneLidar lidar(LidarEndpoint::parse("udp:127.0.0.1:0"), hdl64(), options);
-  const auto start = std::chrono::steady_clock::now();
   try {
     lidar.next();
     ADD_FAILURE() << "a silent stream ended without an error";
   } catch (const io::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no packet arrived within 0.3 s"), std::string::npos) << e.what();
   }
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
 }
 
 // The command line: each failure exits 2 with its message and leaves an existing --out as it was.
