@@ -116,7 +116,7 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
                  ground_only ? "YAML file with pipeline settings (of its sections, voxel_map and ground apply here); "
                                "command-line options override it"
                              : "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
-                               "estimation, footprint, crown, free_space); command-line options override it");
+                               "estimation, footprint, crown, hull, free_space); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
   cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
       ->capture_default_str();
@@ -155,6 +155,9 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_flag("--crowns,!--no-crowns", c.crown.enabled,
                "raise the ground under tree crowns measured in the images above sensed trunks (by their foliage "
                "colour, or against the sky with --set crown.cue=sky) (default: on)");
+  cmd.add_flag("--crown-hull,!--no-crown-hull", c.hull.enabled,
+               "raise the ground under tree crowns to the top of their visual hull: the voxels around sensed trunks "
+               "that many images from places min_parallax apart saw as foliage and almost none as sky (default: off)");
   cmd.add_flag("--sky-ceiling,!--no-sky-ceiling", c.free_space.enabled,
                "lower every recovered height to the lowest ray of a sky pixel over its cell: nothing stands higher "
                "where the cameras saw sky (default: off)");
@@ -239,10 +242,16 @@ void printScorecard(const nlohmann::json& r) {
   }
   if (h.contains("crown_ground_vertices")) {
     std::cout << "    ground vertices raised under tree crowns: " << h["crown_ground_vertices"].get<std::size_t>() << "\n";
+  }
+  if (h.contains("crown_hull")) {
+    const auto& ch = h["crown_hull"];
+    std::cout << "    vertices raised by the crowns' visual hull: " << ch["raised_vertices"].get<int>() << " ("
+              << ch["crown_voxels"].get<std::size_t>() << " crown voxels in " << ch["columns"].get<std::size_t>()
+              << " columns)\n";
+  }
   if (h.contains("sky_ceiling")) {
     std::cout << "    raised vertices lowered to the sky's ceiling: " << h["sky_ceiling"]["lowered_vertices"].get<int>()
               << " (of " << h["sky_ceiling"]["vertices_with_ceiling"].get<std::size_t>() << " vertices with a ceiling)\n";
-  }
   }
   if (h.contains("object_tops")) {
     std::cout << "    object tops the camera saw, at their real height (10 %, at least 1 m) sensed -> recovered:";

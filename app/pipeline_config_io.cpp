@@ -92,6 +92,18 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"footprint.min_raised", integer(c.footprint.min_raised)},
       {"footprint.min_raised_share", num(c.footprint.min_raised_share)},
       {"crown.enabled", [&c](const YAML::Node& n) { c.crown.enabled = n.as<bool>(); }},
+      {"hull.enabled", [&c](const YAML::Node& n) { c.hull.enabled = n.as<bool>(); }},
+      {"hull.cell", num(c.hull.cell)},
+      {"hull.layer", num(c.hull.layer)},
+      {"hull.max_height", num(c.hull.max_height)},
+      {"hull.max_radius", num(c.hull.max_radius)},
+      {"hull.max_distance", num(c.hull.max_distance)},
+      {"hull.min_views", integer(c.hull.min_views)},
+      {"hull.min_parallax", num(c.hull.min_parallax)},
+      {"hull.min_foliage_share", num(c.hull.min_foliage_share)},
+      {"hull.max_sky_share", num(c.hull.max_sky_share)},
+      {"hull.horizon_margin", num(c.hull.horizon_margin)},
+      {"hull.horizon_distance", num(c.hull.horizon_distance)},
       {"free_space.enabled", [&c](const YAML::Node& n) { c.free_space.enabled = n.as<bool>(); }},
       {"free_space.min_distance", num(c.free_space.min_distance)},
       {"free_space.max_distance", num(c.free_space.max_distance)},
@@ -198,6 +210,22 @@ void validate(const PipelineConfig& c) {
           "free_space.max_distance", c.free_space.max_distance, "[free_space.min_distance, 500] m");
   require(c.free_space.margin >= 0 && c.free_space.margin <= 10, "free_space.margin", c.free_space.margin, "[0, 10] m");
   require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre, "[0, 0.5]");
+  require(c.hull.cell >= 0.05 && c.hull.cell <= 5, "hull.cell", c.hull.cell, "[0.05, 5] m");
+  require(c.hull.layer >= 0.05 && c.hull.layer <= 5, "hull.layer", c.hull.layer, "[0.05, 5] m");
+  require(c.hull.max_height > 0 && c.hull.max_height <= 200 && c.hull.max_height / c.hull.layer <= 1000, "hull.max_height",
+          c.hull.max_height, "(0, 200] m and at most 1000 layers of hull.layer");
+  require(c.hull.max_radius > 0 && c.hull.max_radius <= 50 && c.hull.max_radius / c.hull.cell <= 200, "hull.max_radius",
+          c.hull.max_radius, "(0, 50] m and at most 200 cells of hull.cell");
+  require(c.hull.max_distance > 0 && c.hull.max_distance <= 500, "hull.max_distance", c.hull.max_distance, "(0, 500] m");
+  require(c.hull.min_views >= 1 && c.hull.min_views <= 10000, "hull.min_views", c.hull.min_views, "[1, 10000]");
+  require(c.hull.min_parallax >= 0 && c.hull.min_parallax <= 3.14, "hull.min_parallax", c.hull.min_parallax, "[0, 3.14] rad");
+  require(c.hull.min_foliage_share >= 0 && c.hull.min_foliage_share <= 1, "hull.min_foliage_share", c.hull.min_foliage_share,
+          "[0, 1]");
+  require(c.hull.max_sky_share >= 0 && c.hull.max_sky_share <= 1, "hull.max_sky_share", c.hull.max_sky_share, "[0, 1]");
+  require(c.hull.horizon_margin >= -0.5 && c.hull.horizon_margin <= 0.5, "hull.horizon_margin", c.hull.horizon_margin,
+          "[-0.5, 0.5] rad");
+  require(c.hull.horizon_distance >= 0 && c.hull.horizon_distance <= 1000, "hull.horizon_distance", c.hull.horizon_distance,
+          "[0, 1000] m");
   require(c.estimation.max_estimates >= 1 && c.estimation.max_estimates <= 1000, "estimation.max_estimates",
           static_cast<double>(c.estimation.max_estimates), "[1, 1000]");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
@@ -205,7 +233,7 @@ void validate(const PipelineConfig& c) {
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown, free_space");
+  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown, hull, free_space");
 }
 
 void applyPipelineSetting(const std::string& key_value, PipelineConfig& c, const std::string& option) {
@@ -256,6 +284,12 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                 {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
                 {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline},
                 {"max_offcentre", c.crown.max_offcentre}};
+  j["hull"] = {{"enabled", c.hull.enabled}, {"cell", c.hull.cell}, {"layer", c.hull.layer},
+               {"max_height", c.hull.max_height}, {"max_radius", c.hull.max_radius},
+               {"max_distance", c.hull.max_distance}, {"min_views", c.hull.min_views},
+               {"min_parallax", c.hull.min_parallax},
+               {"min_foliage_share", c.hull.min_foliage_share}, {"max_sky_share", c.hull.max_sky_share},
+               {"horizon_margin", c.hull.horizon_margin}, {"horizon_distance", c.hull.horizon_distance}};
   j["free_space"] = {{"enabled", c.free_space.enabled}, {"min_distance", c.free_space.min_distance},
                      {"max_distance", c.free_space.max_distance}, {"margin", c.free_space.margin}};
   return j.dump();

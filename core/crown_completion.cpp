@@ -9,18 +9,6 @@
 
 namespace terrain {
 
-namespace {
-
-// A trunk-sized object: where it stands and how high the lidar saw it.
-struct Trunk {
-  std::uint32_t key = 0;  // its lowest vertex id
-  std::int32_t object = -1;
-  Eigen::Vector2d centre;  // [m] mean of its cell centres
-  double top = 0;          // [m] highest sensed height
-  CellIndex lo, hi;        // its cells' bounds
-};
-
-// The height [m] of the lowest ground vertex within 1 m of the trunk; +inf if there is none.
 double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map) {
   const auto& vertices = mesh.vertices();
   const int ring = static_cast<int>(std::ceil(1.0 / map.voxelSize()));
@@ -35,8 +23,6 @@ double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map
   return ground;
 }
 
-// Does the trunk stand at least min_height above the ground around it (groundAround)? (Yes when
-// there is no ground there to compare with.)
 bool standsAboveGround(const Trunk& t, double ground, double min_height) {
   return !std::isfinite(ground) || t.top - ground >= min_height;
 }
@@ -71,8 +57,6 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
   }
   return trunks;
 }
-
-}  // namespace
 
 const char* outcomeName(CrownOutcome outcome) {
   switch (outcome) {
@@ -444,11 +428,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
         const Eigen::Vector2d p((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell);
         const double d2 = (p - t.centre).squaredNorm();
         if (d2 > r * r) continue;
-        const float h = static_cast<float>(top - r + std::sqrt(r * r - d2));
-        if (h <= m.sensed_height || (m.spread && m.recovered_height >= h)) continue;
-        if (!m.spread) ++raised;
-        m.spread = true;
-        m.recovered_height = h;
+        raised += raiseUnderCrown(m, static_cast<float>(top - r + std::sqrt(r * r - d2)));
       }
     }
   }

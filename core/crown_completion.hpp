@@ -88,6 +88,32 @@ struct CrownConfig {
                                  // beside the trunk's column; farther, the run is another crown
 };
 
+// A trunk-sized object of the mesh: where it stands and how high the lidar saw it.
+struct Trunk {
+  std::uint32_t key = 0;  // its lowest vertex id
+  std::int32_t object = -1;
+  Eigen::Vector2d centre;  // [m] mean of its cell centres
+  double top = 0;          // [m] highest sensed height
+  CellIndex lo, hi;        // its cells' bounds
+};
+// Raises a vertex without estimates of its own to height h under a crown (MeshVertex::spread)
+// unless it stands that high already; true when it was not raised before.
+inline bool raiseUnderCrown(MeshVertex& m, float h) {
+  if (h <= m.sensed_height || (m.spread && m.recovered_height >= h)) return false;
+  const bool fresh = !m.spread;
+  m.spread = true;
+  m.recovered_height = h;
+  return fresh;
+}
+// The objects no wider than max_width [m] either way, in object order.
+std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects,
+                              double max_width);
+// The height [m] of the lowest ground vertex within 1 m of the trunk; +inf if there is none.
+double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map);
+// Does the trunk stand at least min_height above the ground around it (groundAround)? (Yes when
+// there is no ground there to compare with.)
+bool standsAboveGround(const Trunk& t, double ground, double min_height);
+
 // Parses "foliage"/"sky"; false if unknown.
 bool parseCrownCue(const std::string& s, CrownConfig::Cue& out);
 

@@ -110,6 +110,7 @@ void Pipeline::finish() {
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
   crowns_.apply(mesh_, map_, config_.crown);
+  hull_raised_ = hull_.apply(mesh_, map_, config_.hull, config_.crown);
   if (config_.free_space.enabled) sky_lowered_ = ceiling_.apply(mesh_, map_);
   for (auto& r : records_) {
     const Pose pose = poses_.worldFromVehicle(r.time);
@@ -245,11 +246,13 @@ void Pipeline::processReady(const SensorFrame& frame) {
     // the objects in the camera's view, found once for both the clear-line test and the crowns
     std::optional<SkylineOwners> owners;
     const CameraIntrinsics& k = view.camera->intrinsics;
-    if (config_.estimation.clear_line || config_.crown.enabled) {
+    if (config_.estimation.clear_line || config_.crown.enabled || config_.hull.enabled) {
       owners.emplace(mesh_, map_,
                      viewRegion(k, view.world_from_camera,
-                                config_.crown.enabled ? CrownSampler::ownersReach(config_.crown, config_.estimation)
-                                                      : config_.estimation.max_distance));
+                                config_.crown.enabled || config_.hull.enabled
+                                    ? std::max(CrownSampler::ownersReach(config_.crown, config_.estimation),
+                                               config_.hull.max_distance + config_.hull.max_radius)
+                                    : config_.estimation.max_distance));
     }
     const SkylineOwners* shared = owners ? &*owners : nullptr;
     const BoundaryEstimationStats stats = estimateBoundaries(mesh_, map_, boundaries.cleaned, k, view.world_from_camera,
@@ -258,6 +261,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
     projected += stats.projected;
     if (owners) owners->refreshTops(mesh_);
     crowns_.measure(mesh_, map_, rgb, k, view.world_from_camera, config_.crown, config_.estimation, shared);
+    if (owners) hull_.carve(mesh_, map_, rgb, k, view.world_from_camera, *owners, config_.hull, config_.crown, config_.estimation);
     ceiling_.carve(rgb, k, view.world_from_camera, config_.free_space, config_.estimation);
     rec.estimation_ms += msSince(t);
   }

@@ -1,12 +1,13 @@
 #pragma once
 // The pipeline: pose -> voxel map -> terrain mesh -> ground segmentation -> 2D boundary detection
 // -> 3D boundary estimation (and crown samples), one sensor frame at a time; at finish() the whole-map
-// segmentation, footprint completion, crown completion and the sky's ceiling. It reads only SensorFrame and the rig
+// segmentation, footprint completion, crown completion, the crowns' visual hull and the sky's ceiling. It reads only SensorFrame and the rig
 // calibration; it writes nothing and prints nothing: warnings and timings are kept for the caller.
 
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
 #include "core/crown_completion.hpp"
+#include "core/crown_hull.hpp"
 #include "core/footprint_completion.hpp"
 #include "core/free_space.hpp"
 #include "core/ground_segmentation.hpp"
@@ -29,6 +30,7 @@ struct PipelineConfig {
   BoundaryEstimationConfig estimation;
   FootprintConfig footprint;
   CrownConfig crown;
+  CrownHullConfig hull;
   FreeSpaceConfig free_space;
   int segment_every = 1;  // run ground segmentation every this many frames (and at the end)
 };
@@ -64,6 +66,11 @@ class Pipeline {
   // what crown completion made of every trunk a frame looked at (by trunk key)
   std::vector<CrownRecord> crownRecords() const { return crowns_.records(); }
   const std::vector<FrameRecord>& records() const { return records_; }
+  // vertices the crowns' visual hull raised at finish() (0 after restore())
+  int hullRaised() const { return hull_raised_; }
+  // the hull's columns and crown voxels (0 after restore())
+  std::size_t hullColumns() const { return hull_.columns(); }
+  std::size_t hullCrownVoxels() const { return hull_.crownVoxels(config_.hull); }
   // raised vertices the sky's ceiling lowered at finish() (0 after restore())
   int skyLowered() const { return sky_lowered_; }
   const std::vector<std::string>& warnings() const { return warnings_; }
@@ -99,6 +106,7 @@ class Pipeline {
   std::vector<Footprint> footprints_;        // from finish()
   std::vector<RoofCell> roof_cells_;
   CrownSampler crowns_;                      // crown samples, frame by frame
+  CrownHull hull_;                           // the crowns' visual hull, frame by frame
   SkyCeiling ceiling_;                       // the sky's rays, frame by frame
   IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {
@@ -112,6 +120,7 @@ class Pipeline {
   int last_boundary_frame_ = -1;
   int processed_ = 0;
   int sky_lowered_ = 0;
+  int hull_raised_ = 0;
   bool dirty_ = false;  // points added since the last segmentation
 };
 

@@ -386,6 +386,9 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
     parallax += m.parallax;
   }
   hr["crown_ground_vertices"] = under_crowns;
+  hr["crown_hull"] = {{"raised_vertices", pipeline.hullRaised()},
+                      {"columns", pipeline.hullColumns()},
+                      {"crown_voxels", pipeline.hullCrownVoxels()}};
   // raised vertices the sky's ceiling lowered (free space), and how many vertices have a ceiling
   std::size_t with_ceiling = 0;
   for (const auto& m : pipeline.mesh().vertices()) with_ceiling += std::isfinite(m.ceiling);
