@@ -68,7 +68,7 @@ std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const
 
   // the horizon of the sensed ground around the camera: per azimuth bin the steepest rise
   // (height over distance) to a ground vertex, computed when a column in the bin is first voted on;
-  // the cameras of one frame share it (they stand within horizon_reuse of each other)
+  // the cameras of one frame share it (they stand within kHorizonReuse of each other)
   const auto& vertices = mesh.vertices();
   const double vs = map.voxelSize();
   if (horizon_.empty() || horizon_mesh_ != vertices.size() || (origin - horizon_origin_).norm() > kHorizonReuse) {
