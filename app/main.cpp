@@ -876,6 +876,10 @@ int main(int argc, char** argv) {
                   "baseline as a whole run would (a missing, failed or duplicated shard is an error)")
       ->excludes(reg->get_option("--shard"));
   reg->add_flag("--force", reg_force, "replace an existing --write-baseline file, and write into a non-empty --out");
+  bool reg_list = false;
+  reg->add_flag("--list", reg_list,
+                "run nothing: print the suite's scenarios (of --shard K/N's part only, if given), one id a line "
+                "(TYPE_sSEED_fFRAMES)");
   addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
 
   // terrain kitti
@@ -1023,8 +1027,14 @@ int main(int argc, char** argv) {
     if (reg->parsed()) {
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       const eval::Suite suite = eval::loadSuite(reg_suite);
-      if (!reg_write.empty() && !reg_baseline.empty()) throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
       const bool sharded = !reg_shard.empty();
+      if (reg_list) {
+        if (!reg_merge.empty()) throw io::InputError("--list runs nothing: give it without --merge");
+        for (const auto& sc : eval::shardOf(suite, sharded ? eval::parseShard(reg_shard) : eval::Shard{}).scenarios)
+          std::cout << sc.id() << "\n";
+        return 0;
+      }
+      if (!reg_write.empty() && !reg_baseline.empty()) throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
       if (sharded && !reg_write.empty()) throw io::InputError("--shard never writes a baseline: merge the shards with --merge and --write-baseline");
       if (!sharded && reg_write.empty() && reg_baseline.empty()) throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");
       const eval::Shard shard = sharded ? eval::parseShard(reg_shard) : eval::Shard{};
