@@ -1,6 +1,7 @@
 #include "app/html_report.hpp"
 
 #include "app/outputs.hpp"
+#include "app/report_view.hpp"
 #include "core/camera_model.hpp"
 #include "evaluation/report.hpp"
 
@@ -13,9 +14,7 @@
 
 namespace terrain::app {
 
-namespace {
-
-std::string base64(const std::vector<uchar>& data) {
+std::string base64(const std::vector<unsigned char>& data) {
   static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   out.reserve((data.size() + 2) / 3 * 4);
@@ -29,6 +28,8 @@ std::string base64(const std::vector<uchar>& data) {
   }
   return out;
 }
+
+namespace {
 
 std::string img(const cv::Mat& bgr, const std::string& alt) {
   std::vector<uchar> png;
@@ -112,7 +113,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
        "td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}th{background:#eee}img{margin:4px;max-width:100%}"
        "</style></head><body><h1>"
     << title << "</h1><p>" << r.value("frames", 0) << " frames, " << r.value("voxels", 0) << " voxels. Scene: "
-    << world.truth().type << " (seed " << world.truth().seed << ").</p>";
+    << world.truth().type << " (seed " << world.truth().seed << ").</p>" << reportView(p, truth, world);
   // metrics
   if (r.contains("pose") && r["pose"].value("frames", 0) > 0) {
     const auto& pose = r["pose"];

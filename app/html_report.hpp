@@ -10,8 +10,12 @@
 #include <nlohmann/json.hpp>
 
 #include <string>
+#include <vector>
 
 namespace terrain::app {
+
+// RFC 4648 base64 of data (with padding)
+std::string base64(const std::vector<unsigned char>& data);
 
 std::string htmlReport(const nlohmann::json& report, const Pipeline& pipeline, const eval::RunTruth& truth,
                        const sim::World& world, const std::string& title);

@@ -26,13 +26,6 @@ void writePng(const fs::path& path, const cv::Mat& image) {
   io::writeFileAtomic(path, std::string(buf.begin(), buf.end()), true);
 }
 
-// vertex colour: the top voxel's camera colour, or yellow where the camera never saw it (paper Fig. 1c)
-std::array<std::uint8_t, 3> vertexColour(const Pipeline& p, const MeshVertex& m) {
-  const Voxel& v = p.map().voxels()[m.top_voxel];
-  if (v.coloured) return {v.r, v.g, v.b};
-  return {255, 220, 0};
-}
-
 // The mesh as written: the terrain mesh's vertices, then the roof cells of completed footprints
 // (inferred, never sensed or seen), triangulated together on the grid.
 struct OutputMesh {
@@ -64,7 +57,7 @@ OutputMesh outputMesh(const Pipeline& p) {
   for (const auto& m : p.mesh().vertices()) {
     add(m.cell, m.height(), m.sensed_height, vertexColour(p, m), !p.map().voxels()[m.top_voxel].coloured, m.raised(), false);
   }
-  for (const auto& r : p.roofCells()) add(r.cell, r.height, std::nanf(""), {255, 220, 0}, true, true, true);
+  for (const auto& r : p.roofCells()) add(r.cell, r.height, std::nanf(""), kUnseenColour, true, true, true);
   out.triangles = gridTriangles(out.cells, [&](const CellIndex& c) -> std::int64_t {
     const auto it = index.find(key(c));
     return it == index.end() ? -1 : static_cast<std::int64_t>(it->second);
@@ -277,6 +270,12 @@ void writeGlbs(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
     }
     io::writeFileAtomic(dir / (before ? "mesh_before.glb" : "mesh.glb"), encodeGlb(g), true);
   }
+}
+
+std::array<std::uint8_t, 3> vertexColour(const Pipeline& p, const MeshVertex& m) {
+  const Voxel& v = p.map().voxels()[m.top_voxel];
+  if (v.coloured) return {v.r, v.g, v.b};
+  return kUnseenColour;
 }
 
 void writeReconstruction(const fs::path& dir, const Pipeline& p) {

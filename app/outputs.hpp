@@ -5,10 +5,18 @@
 
 #include "core/pipeline.hpp"
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
 namespace terrain::app {
+
+// the colour of what no camera saw (the paper's yellow, Fig. 1c) [RGB]
+constexpr std::array<std::uint8_t, 3> kUnseenColour{255, 220, 0};
+
+// A mesh vertex's colour [RGB]: its top voxel's camera colour, or kUnseenColour where no camera saw it.
+std::array<std::uint8_t, 3> vertexColour(const Pipeline& pipeline, const MeshVertex& vertex);
 
 // Writes everything into dir (which exists). Files are written whole or not at all.
 void writeReconstruction(const std::filesystem::path& dir, const Pipeline& pipeline);
