@@ -201,16 +201,22 @@ void printScorecard(const nlohmann::json& r) {
     std::cout << "    " << std::left << std::setw(28) << m << std::right << g["f1"].get<double>() << "  " << g["iou"].get<double>()
               << "  " << g["precision"].get<double>() << "      " << g["recall"].get<double>() << "\n";
   }
+  for (const auto& w : r.value("truth_warnings", nlohmann::json::array())) std::cerr << "terrain: warning: " << w.get<std::string>() << "\n";
   const auto& h = r["height_recovery"];
-  std::cout << "  object heights (" << h["after"]["cells"].get<std::size_t>() << " cells)   MAE m   RMSE m  bias m   variance m2\n";
-  for (const char* k : {"before", "after"}) {
-    std::cout << "    " << std::left << std::setw(28) << (std::string(k) == "before" ? "sensed only" : "boundary estimation") << std::right
-              << h[k]["mae_m"].get<double>() << "  " << h[k]["rmse_m"].get<double>() << "  " << h[k]["bias_m"].get<double>() << "  "
-              << h[k]["variance_m2"].get<double>() << "\n";
+  if (h["after"]["cells"].get<std::size_t>() == 0) {
+    std::cout << "  object heights: no object cells, not scored\n";
+  } else {
+    std::cout << "  object heights (" << h["after"]["cells"].get<std::size_t>() << " cells)   MAE m   RMSE m  bias m   variance m2\n";
+    for (const char* k : {"before", "after"}) {
+      std::cout << "    " << std::left << std::setw(28) << (std::string(k) == "before" ? "sensed only" : "boundary estimation")
+                << std::right << h[k]["mae_m"].get<double>() << "  " << h[k]["rmse_m"].get<double>() << "  "
+                << h[k]["bias_m"].get<double>() << "  " << h[k]["variance_m2"].get<double>() << "\n";
+    }
+    std::cout << "    cells that got an estimate: " << h["estimated_cells"]["after"]["cells"].get<std::size_t>() << ", MAE "
+              << h["estimated_cells"]["before"]["mae_m"].get<double>() << " -> "
+              << h["estimated_cells"]["after"]["mae_m"].get<double>()
+              << " m; terrain cells wrongly raised: " << h["raised_terrain_cells"].get<std::size_t>() << "\n";
   }
-  std::cout << "    cells that got an estimate: " << h["estimated_cells"]["after"]["cells"].get<std::size_t>() << ", MAE "
-            << h["estimated_cells"]["before"]["mae_m"].get<double>() << " -> " << h["estimated_cells"]["after"]["mae_m"].get<double>()
-            << " m; terrain cells wrongly raised: " << h["raised_terrain_cells"].get<std::size_t>() << "\n";
   if (h.contains("by_kind")) {
     std::cout << "    by kind:";
     for (const auto& [kind, e] : h["by_kind"].items()) {

@@ -42,7 +42,8 @@ void VoxelTruth::add(const rig::RigFrame& frame, const Pose& vehicle_from_lidar)
 
 TruthLabel VoxelTruth::label(const VoxelIndex& index) const {
   auto it = votes_.find(key(index));
-  if (it == votes_.end()) return TruthLabel::Unknown;
+  // only points on geoms the truth gives no class: neither ground nor object
+  if (it == votes_.end() || (it->second.first == 0 && it->second.second == 0)) return TruthLabel::Unknown;
   return it->second.first >= it->second.second ? TruthLabel::Ground : TruthLabel::NonGround;
 }
 

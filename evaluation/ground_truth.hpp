@@ -21,6 +21,8 @@ class VoxelTruth {
 
   // Adds a frame's points with their true classes (frames without truth are ignored).
   void add(const rig::RigFrame& frame, const Pose& vehicle_from_lidar);
+  // Ground where ground points are at least as many as object points, NonGround otherwise; Unknown
+  // where no point fell, or only points on geoms the truth gives no class.
   TruthLabel label(const VoxelIndex& index) const;
   // true points in a voxel: (ground, non-ground)
   std::pair<std::uint32_t, std::uint32_t> votes(const VoxelIndex& index) const;

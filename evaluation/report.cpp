@@ -239,6 +239,14 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   r["frames"] = pipeline.records().size();
   r["voxels"] = map.size();
   r["pose"] = poseJson(pipeline, truth);
+  // what the truth leaves unscored
+  json truth_warnings = json::array();
+  if (const std::vector<std::string> loose = world.unclassifiedGeoms(); !loose.empty()) {
+    std::string names;
+    for (std::size_t i = 0; i < std::min<std::size_t>(5, loose.size()); ++i) names += (i ? ", " : "") + loose[i];
+    truth_warnings.push_back(std::to_string(loose.size()) + " scene geom(s) belong to no object of the truth sidecar and are not the terrain (" +
+                             names + (loose.size() > 5 ? ", ..." : "") + "): their points and cells are scored as neither ground nor object");
+  }
 
   // ground segmentation: histogram, both GMRF solvers, the baselines
   GroundSegmentationConfig other = pipeline.config().ground;
@@ -273,6 +281,11 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["before"] = errorJson(h.before);
   hr["after"] = errorJson(h.after);
   hr["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
+  if (h.after.count == 0) {
+    truth_warnings.push_back(world.truth().objects.empty()
+                                 ? "the truth sidecar lists no objects: object heights are not scored (0 cells)"
+                                 : "no cell of the map lies under an object of the truth: object heights are not scored (0 cells)");
+  }
   hr["raised_terrain_cells"] = h.raised_terrain_cells;
   hr["raised_terrain_cells_by_step"] = {{"crown_completion", h.raised_terrain_ground_cells},
                                         {"boundary_estimation", h.raised_terrain_cells - h.raised_terrain_ground_cells}};
@@ -501,6 +514,7 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   r["cameras"] = json::array();
   for (const auto& c : cameras) r["cameras"].push_back(c.name);
   r["timing"] = timingJson(pipeline.records());
+  r["truth_warnings"] = truth_warnings;
   return r;
 }
 

@@ -85,6 +85,17 @@ void World::finishLoading() {
   caster_ = std::make_unique<RayCaster>(model_, data_, robot_body_);
 }
 
+std::vector<std::string> World::unclassifiedGeoms() const {
+  std::vector<std::string> out;
+  for (int g = 0; g < model_->ngeom; ++g) {
+    if (classes_[g] != scenes::GeomClass::None) continue;
+    if (robot_body_ >= 0 && model_->geom_bodyid[g] == robot_body_) continue;
+    const char* name = mj_id2name(model_, mjOBJ_GEOM, g);
+    out.push_back(name ? std::string(name) : "geom " + std::to_string(g));
+  }
+  return out;
+}
+
 double World::terrainHeight(double x, double y) const {
   const mjtNum pnt[3] = {x, y, top_z_}, down[3] = {0, 0, -1};
   const int type = model_->geom_type[terrain_geom_];

@@ -34,6 +34,9 @@ class World {
   scenes::GeomClass geomClass(int geom) const {
     return geom >= 0 && geom < static_cast<int>(classes_.size()) ? classes_[geom] : scenes::GeomClass::None;
   }
+  // Geoms the truth gives no class (neither the terrain, an object's nor the robot's), by name
+  // ("geom N" when unnamed): the evaluation scores them as neither ground nor object.
+  std::vector<std::string> unclassifiedGeoms() const;
   // body id of the robot, excluded from lidar rays; -1 if the scene has no robot
   int robotBody() const { return robot_body_; }
   // geom id of the terrain

@@ -1,6 +1,7 @@
 #include "evaluation/metrics.hpp"
 #include "core/camera_model.hpp"
 #include "evaluation/report.hpp"
+#include "evaluation/ground_truth.hpp"
 #include "evaluation/scoring.hpp"
 #include "tests/test_support.hpp"
 
@@ -23,6 +24,43 @@ TEST(MetricsTest, BinaryScoresOfASmallConfusionMatrix) {
   EXPECT_EQ(t.fn, 1u);
   EXPECT_EQ(t.tn, 1u);
   EXPECT_DOUBLE_EQ(binaryScores(0, 0, 0, 5).f1, 0.0);
+}
+
+// A scene geom that the truth lists under no object: named by the world, and points on it are
+// neither true ground nor true object (a sidecar with "objects": [] once made a building's voxels
+// true ground)
+TEST(MetricsTest, GeomsOfNoObjectAreNamedAndScoredAsNeitherClass) {
+  scenes::SceneTruth truth = test::wallTruth(10);
+  EXPECT_TRUE(sim::World(test::wallScene(10), truth).unclassifiedGeoms().empty());
+  truth.objects.clear();
+  const sim::World world(test::wallScene(10), truth);
+  EXPECT_EQ(world.unclassifiedGeoms(), std::vector<std::string>{"wall"});
+
+  // three points in voxel (50, 0, 5) of 0.2 m: on the unclassified wall only; two in (0, 0, 0),
+  // one on the ground and one on the wall; one in (1, 0, 0) on a building
+  rig::RigFrame frame;
+  frame.truth.emplace();
+  frame.truth->poses = {{0.0, Pose::Identity()}, {1.0, Pose::Identity()}};
+  const auto add = [&](float x, float y, float z, std::uint8_t cls) {
+    LidarPoint p;
+    p.x = x, p.y = y, p.z = z, p.time = 0.5;
+    frame.sensors.sweep.points.push_back(p);
+    frame.truth->points.push_back({});
+    frame.truth->points.back().cls = cls;
+  };
+  const auto none = static_cast<std::uint8_t>(scenes::GeomClass::None);
+  const auto ground = static_cast<std::uint8_t>(scenes::GeomClass::Ground);
+  const auto building = static_cast<std::uint8_t>(scenes::GeomClass::Building);
+  for (int i = 0; i < 3; ++i) add(10.05f, 0.05f, 1.05f, none);
+  add(0.05f, 0.05f, 0.05f, ground);
+  add(0.06f, 0.05f, 0.05f, none);
+  add(0.25f, 0.05f, 0.05f, building);
+  VoxelTruth voxels(0.2);
+  voxels.add(frame, Pose::Identity());
+  EXPECT_EQ(voxels.label(VoxelIndex(50, 0, 5)), TruthLabel::Unknown);
+  EXPECT_EQ(voxels.label(VoxelIndex(0, 0, 0)), TruthLabel::Ground);
+  EXPECT_EQ(voxels.label(VoxelIndex(1, 0, 0)), TruthLabel::NonGround);
+  EXPECT_EQ(voxels.label(VoxelIndex(2, 0, 0)), TruthLabel::Unknown);
 }
 
 TEST(MetricsTest, ErrorStatsOfAKnownSet) {
