@@ -107,4 +107,17 @@ void StagedDirectory::commit() {
   if (!old.empty()) fs::remove_all(old, ec);
 }
 
+void requireSpace(const fs::path& out, std::uintmax_t bytes, const std::string& what) {
+  fs::path at = fs::absolute(out).parent_path();
+  while (!fs::exists(at) && at.has_parent_path() && at != at.parent_path()) at = at.parent_path();
+  std::error_code ec;
+  const fs::space_info space = fs::space(at, ec);
+  if (ec || bytes <= space.available) return;
+  std::ostringstream m;
+  m.precision(3);
+  m << out.string() << ": " << what << " needs at least " << static_cast<double>(bytes) / 1e9 << " GB, and "
+    << at.string() << " has " << static_cast<double>(space.available) / 1e9 << " GB free";
+  throw InputError(m.str());
+}
+
 }  // namespace terrain::io

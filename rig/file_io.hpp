@@ -3,6 +3,7 @@
 // never leaves a half-written file, and an existing file or directory is never replaced unless
 // the caller allows it.
 
+#include <cstdint>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -25,6 +26,11 @@ void writeFileAtomic(const std::filesystem::path& path, const std::string& bytes
 // Prepares an output directory: creates it if absent. If it exists and is not empty, throws
 // InputError unless force is true.
 void prepareOutputDir(const std::filesystem::path& dir, bool force);
+
+// Throws InputError when the filesystem that will hold `out` (its nearest existing ancestor) has
+// fewer than `bytes` bytes free, naming out, what needs them (`what`, e.g. "recording 60 frames")
+// and the free space; does nothing when the free space cannot be known.
+void requireSpace(const std::filesystem::path& out, std::uintmax_t bytes, const std::string& what);
 
 // An output directory built beside its target (TARGET.partial-PID) and moved into place by
 // commit(): until then the target is untouched, and a failure (the destructor without commit)
