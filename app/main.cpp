@@ -606,8 +606,41 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   std::unique_ptr<rig::pcap::Writer> capture;
   std::unique_ptr<rig::velodyne::PacketEncoder> encoder;
   std::vector<rig::velodyne::TimedPacket> packets;
+  // position packets (port 8308) for the GPS fixes: $GPGGA for every fix, $GPRMC (the date) once a
+  // simulated second, each at its fix's time
+  struct PositionOut {
+    double time;
+    std::vector<std::uint8_t> payload;
+  };
+  std::vector<PositionOut> positions;
+  long long position_packets = 0;
+  double last_rmc_second = -1;
+  const auto addPositions = [&](const std::vector<GpsFix>& fixes) {
+    for (const GpsFix& f : fixes) {
+      const double epoch = rig::pcap::kSimulationEpoch + f.time;
+      const auto stamp = static_cast<std::uint32_t>(std::llround(f.time * 1e6) % 3600000000LL);
+      positions.push_back({f.time, rig::velodyne::positionPacket(
+                                       stamp, rig::velodyne::gpggaSentence(epoch, f.latitude_deg, f.longitude_deg,
+                                                                           f.altitude_m, f.sigma_m / 2.5))});
+      if (std::floor(f.time) != last_rmc_second) {
+        last_rmc_second = std::floor(f.time);
+        positions.push_back({f.time, rig::velodyne::positionPacket(
+                                         stamp, rig::velodyne::gprmcSentence(epoch, f.latitude_deg, f.longitude_deg))});
+      }
+    }
+  };
+  // data and position packets in time order (a fix before the data packets of the same time)
   auto writePackets = [&] {
-    for (const auto& p : packets) capture->write(rig::pcap::kSimulationEpoch + p.time, p.payload.data(), p.payload.size());
+    std::size_t next = 0;
+    for (const auto& p : packets) {
+      for (; next < positions.size() && positions[next].time <= p.time; ++next) {
+        capture->write(rig::pcap::kSimulationEpoch + positions[next].time, positions[next].payload.data(),
+                       positions[next].payload.size(), 8308);
+        ++position_packets;
+      }
+      capture->write(rig::pcap::kSimulationEpoch + p.time, p.payload.data(), p.payload.size());
+    }
+    positions.erase(positions.begin(), positions.begin() + static_cast<std::ptrdiff_t>(next));
     packets.clear();
   };
   if (with_pcap) {
@@ -622,6 +655,7 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
     points += static_cast<long long>(frame->sensors.sweep.points.size());
     writer.write(*frame);
     if (encoder) {
+      addPositions(frame->sensors.gps);
       encoder->addSweep(frame->sensors.sweep, packets);
       writePackets();
     }
@@ -630,9 +664,14 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   if (encoder) {
     encoder->finish(packets);
     writePackets();
+    for (const auto& p : positions) {  // fixes after the last data packet
+      capture->write(rig::pcap::kSimulationEpoch + p.time, p.payload.data(), p.payload.size(), 8308);
+      ++position_packets;
+    }
     capture->close();
     const auto& st = encoder->stats();
-    std::cout << "wrote lidar.pcap: " << st.packets << " HDL-64E packets, " << st.points << " returns";
+    std::cout << "wrote lidar.pcap: " << st.packets << " HDL-64E packets, " << st.points << " returns, " << position_packets
+              << " position packets";
     if (st.too_close + st.too_far + st.off_schedule > 0) {
       std::cout << " (" << st.too_close + st.too_far + st.off_schedule << " returns not encodable)";
     }
@@ -767,7 +806,9 @@ int main(int argc, char** argv) {
   rec->add_option("--out", rec_out, "output dataset directory")->required();
   rec->add_flag("--force", rec_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
   bool rec_pcap = false;
-  rec->add_flag("--pcap", rec_pcap, "also write the lidar as HDL-64E packets in OUT/lidar.pcap (Wireshark, VeloView, PCL open it)");
+  rec->add_flag("--pcap", rec_pcap,
+                "also write the lidar as HDL-64E packets in OUT/lidar.pcap (Wireshark, VeloView, PCL open it), with the "
+                "GPS as position packets (port 8308: $GPGGA for every fix, $GPRMC once a second)");
   try {
     if (!config_file.empty()) sim::loadSimConfig(config_file, sim_cfg);
   } catch (const io::InputError& e) {

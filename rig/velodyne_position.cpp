@@ -192,25 +192,52 @@ std::vector<std::uint8_t> positionPacket(std::uint32_t timestamp_us, const std::
   return d;
 }
 
-std::string gprmcSentence(double epoch, double latitude_deg, double longitude_deg, double speed_mps, bool valid) {
+namespace {
+
+// "dd" or "ddd" degrees and minutes with `decimals` decimals, as NMEA writes an angle's magnitude
+std::string ddmm(double deg, int width, int decimals) {
+  const double a = std::abs(deg);
+  double whole = std::floor(a);
+  double minutes = (a - whole) * 60.0;
+  // minutes that round up to 60 carry into the degrees
+  if (std::round(minutes * std::pow(10.0, decimals)) >= 60.0 * std::pow(10.0, decimals)) whole += 1, minutes = 0;
+  char b[48];
+  std::snprintf(b, sizeof b, "%0*d%0*.*f", width, static_cast<int>(whole), decimals + 3, decimals, minutes);
+  return std::string(b);
+}
+
+// UTC time of day [s] of an epoch, and the date of its day
+double utcTimeOfDay(double epoch, std::tm& date) {
   const double day = std::floor(epoch / 86400.0);
-  const double tod = epoch - day * 86400.0;
   const std::time_t t = static_cast<std::time_t>(day * 86400.0);
+  gmtime_r(&t, &date);
+  return epoch - day * 86400.0;
+}
+
+}  // namespace
+
+std::string gpggaSentence(double epoch, double latitude_deg, double longitude_deg, double altitude_m, double hdop) {
   std::tm utc{};
-  gmtime_r(&t, &utc);
+  const double tod = utcTimeOfDay(epoch, utc);
   const int hh = static_cast<int>(tod / 3600), mm = static_cast<int>((tod - hh * 3600) / 60);
   const double ss = tod - hh * 3600 - mm * 60;
-  const auto ddmm = [](double deg, int width) {
-    const double a = std::abs(deg);
-    const double whole = std::floor(a);
-    char b[32];
-    std::snprintf(b, sizeof b, "%0*d%07.4f", width, static_cast<int>(whole), (a - whole) * 60.0);
-    return std::string(b);
-  };
+  char body[200];
+  std::snprintf(body, sizeof body, "GPGGA,%02d%02d%06.3f,%s,%c,%s,%c,1,12,%.2f,%.3f,M,0.000,M,,", hh, mm, ss,
+                ddmm(latitude_deg, 2, 7).c_str(), latitude_deg < 0 ? 'S' : 'N', ddmm(longitude_deg, 3, 7).c_str(),
+                longitude_deg < 0 ? 'W' : 'E', hdop, altitude_m);
+  return withChecksum(body);
+}
+
+std::string gprmcSentence(double epoch, double latitude_deg, double longitude_deg, double speed_mps, bool valid) {
+  std::tm utc{};
+  const double tod = utcTimeOfDay(epoch, utc);
+  const int hh = static_cast<int>(tod / 3600), mm = static_cast<int>((tod - hh * 3600) / 60);
+  const double ss = tod - hh * 3600 - mm * 60;
+  const auto ddmm4 = [](double deg, int width) { return ddmm(deg, width, 4); };
   char body[160];
   std::snprintf(body, sizeof body, "GPRMC,%02d%02d%06.3f,%c,%s,%c,%s,%c,%.2f,0.0,%02d%02d%02d,,,A", hh, mm, ss,
-                valid ? 'A' : 'V', ddmm(latitude_deg, 2).c_str(), latitude_deg < 0 ? 'S' : 'N',
-                ddmm(longitude_deg, 3).c_str(), longitude_deg < 0 ? 'W' : 'E', speed_mps * 3600.0 / 1852.0, utc.tm_mday,
+                valid ? 'A' : 'V', ddmm4(latitude_deg, 2).c_str(), latitude_deg < 0 ? 'S' : 'N',
+                ddmm4(longitude_deg, 3).c_str(), longitude_deg < 0 ? 'W' : 'E', speed_mps * 3600.0 / 1852.0, utc.tm_mday,
                 utc.tm_mon + 1, utc.tm_year % 100);
   return withChecksum(body);
 }

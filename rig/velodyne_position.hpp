@@ -55,6 +55,11 @@ std::vector<std::uint8_t> positionPacket(std::uint32_t timestamp_us, const std::
 std::string gprmcSentence(double epoch, double latitude_deg, double longitude_deg, double speed_mps = 0,
                           bool valid = true);
 
+// An NMEA $GPGGA sentence (with checksum, no CR LF) for a fix at UTC `epoch` [s since 1970]: quality 1
+// (GPS), 12 satellites, the given HDOP, altitude [m] with a geoid separation of 0 (so that it reads
+// back as the ellipsoidal height), angles to 1e-7 minute (0.2 mm).
+std::string gpggaSentence(double epoch, double latitude_deg, double longitude_deg, double altitude_m, double hdop);
+
 // The time base [s] that puts a packet timestamp on UTC: the top of the hour such that
 // base + timestamp_us lies nearest to the UTC time the packet's sentence gives.
 double timeBaseFromFix(std::uint32_t timestamp_us, double fix_epoch);

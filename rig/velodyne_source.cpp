@@ -214,8 +214,19 @@ void VelodyneLidar::position(const std::vector<std::uint8_t>& payload) {
     ++position_.no_fix;
     return;
   }
+  // a receiver that sends $GPRMC and $GPGGA for one epoch (one packet timestamp) gives one fix, the
+  // GGA's, which has the altitude
+  const GpsFix g = velodyne::gpsFix(*packet, *fix, options_.decoder.time_base);
+  if (last_fix_stamp_ == static_cast<std::int64_t>(packet->timestamp_us)) {
+    if (!fix->altitude_m) return;  // an RMC after the epoch's GGA
+    if (!fixes_.empty() && fixes_.back().time == g.time) {
+      fixes_.back() = g;  // the GGA after the epoch's RMC
+      return;
+    }
+  }
+  last_fix_stamp_ = packet->timestamp_us;
   ++position_.fixes;
-  fixes_.push_back(velodyne::gpsFix(*packet, *fix, options_.decoder.time_base));
+  fixes_.push_back(g);
 }
 
 std::vector<GpsFix> VelodyneLidar::takeFixes() {

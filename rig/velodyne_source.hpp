@@ -126,6 +126,7 @@ class VelodyneLidar {
   void checkModel(const std::uint8_t* data, std::size_t size);
   PositionStats position_;
   std::vector<GpsFix> fixes_;
+  std::int64_t last_fix_stamp_ = -1;  // packet timestamp of the last fix taken (-1: none yet)
 };
 
 // A rig whose lidar sweeps come from a VelodyneLidar and whose camera, GPS and gyro come from

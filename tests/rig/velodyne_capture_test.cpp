@@ -6,9 +6,11 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
 namespace terrain::rig {
 namespace {
@@ -199,6 +201,67 @@ TEST(VelodyneCaptureTest, PositionPacketsGiveTheCaptureItsGpsAndTimeBase) {
   }
   ASSERT_EQ(fix_times.size(), 3u);
   EXPECT_NEAR(fix_times[2], 2.0, 1e-6);
+}
+
+// A $GPGGA sentence reads back as the fix it was written from (angles to 1e-7 minute, altitude to
+// the millimetre, HDOP to 0.01), in both hemispheres, and minutes that round to 60 carry
+TEST(VelodyneCaptureTest, AGpggaSentenceReadsBackAsItsFix) {
+  const double epoch = 1767225600.0 + 3723.25;  // 2026-01-01 01:02:03.25 UTC
+  for (const auto& [lat, lon] : {std::pair{37.5585098482, 126.9983172650}, {-33.8688, -151.2093}, {0.0, 0.0}}) {
+    const std::string s = velodyne::gpggaSentence(epoch, lat, lon, 61.7297, 0.02);
+    const auto fix = velodyne::parseNmea(s);
+    ASSERT_TRUE(fix) << s;
+    EXPECT_EQ(fix->type, "GPGGA");
+    EXPECT_TRUE(fix->valid);
+    EXPECT_NEAR(fix->time_of_day, 3723.25, 1e-6);
+    EXPECT_NEAR(fix->latitude_deg, lat, 1e-7 / 60 + 1e-12) << s;
+    EXPECT_NEAR(fix->longitude_deg, lon, 1e-7 / 60 + 1e-12) << s;
+    ASSERT_TRUE(fix->altitude_m);
+    EXPECT_NEAR(*fix->altitude_m, 61.730, 1e-9);
+    ASSERT_TRUE(fix->hdop);
+    EXPECT_NEAR(*fix->hdop, 0.02, 1e-12);
+  }
+  // 10.99999999999 degrees: 59.99999999 minutes round to 60 and carry into 11 degrees 0 minutes
+  const std::string carried = velodyne::gpggaSentence(epoch, 10.99999999999, 0.5, 0, 1);
+  EXPECT_NE(carried.find(",1100.0000000,N,"), std::string::npos) << carried;
+}
+
+// 'terrain record --pcap' writes the simulated GPS as position packets (port 8308): a $GPGGA for
+// every fix and a $GPRMC once a second; the capture alone then carries the same fixes, one per fix
+// (the RMC of an epoch adds none), on the capture clock
+TEST(VelodyneCaptureTest, ARecordedCaptureCarriesTheSimulatedGps) {
+  test::TempDir dir;
+  const std::string rec = (dir / "rec").string(), conv = (dir / "conv").string();
+  ASSERT_EQ(0, test::sh(test::kCli + " record --scene " + test::kUrbanScene + " --frames 12 --cameras forward --pcap --out " +
+                        rec + " > /dev/null"));
+  ASSERT_EQ(0, test::sh(test::kCli + " lidar convert --pcap " + rec + "/lidar.pcap --out " + conv + " > /dev/null"));
+  const auto rows = [](const std::string& path) {
+    std::vector<std::vector<double>> out;
+    std::istringstream in(io::readFile(path));
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+      std::vector<double> v;
+      std::istringstream fields(line);
+      for (std::string f; std::getline(fields, f, ',');) v.push_back(std::stod(f));
+      out.push_back(v);
+    }
+    return out;
+  };
+  const auto simulated = rows(rec + "/gps.csv"), decoded = rows(conv + "/gps.csv");
+  ASSERT_EQ(simulated.size(), 12u);  // 10 Hz, one a frame
+  ASSERT_EQ(decoded.size(), simulated.size());
+  for (std::size_t i = 0; i < simulated.size(); ++i) {
+    EXPECT_NEAR(decoded[i][0] - pcap::kSimulationEpoch, simulated[i][0], 1e-6) << i;  // time on the capture clock
+    EXPECT_NEAR(decoded[i][1], simulated[i][1], 1e-8) << i;
+    EXPECT_NEAR(decoded[i][2], simulated[i][2], 1e-8) << i;
+    EXPECT_NEAR(decoded[i][3], simulated[i][3], 6e-4) << i;
+    EXPECT_NEAR(decoded[i][4], simulated[i][4], 1e-12) << i;
+  }
+  const auto capture = nlohmann::json::parse(io::readFile(conv + "/capture.json"));
+  EXPECT_EQ(capture["position_packets"]["packets"], 14);  // 12 GGA, RMC at 0 s and 1 s
+  EXPECT_EQ(capture["position_packets"]["fixes"], 12);
+  EXPECT_EQ(capture["time_base_source"], "gps");
 }
 
 TEST(VelodyneCaptureTest, DualReturnPacketsDecodeBothReturnsOnce) {
