@@ -25,6 +25,7 @@
 #include "rig/pcap_file.hpp"
 #include "rig/velodyne_source.hpp"
 #include "scenes/scene_generator.hpp"
+#include "sim/scene_checks.hpp"
 #include "sim/simulated_rig.hpp"
 
 #include <CLI/CLI.hpp>
@@ -543,19 +544,37 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
   return report;
 }
 
+// Prints a scene's warnings; throws io::InputError (naming the scene) on its errors.
+void checkSceneOrThrow(const sim::World& world, const sim::SimConfig& config, const fs::path& scene) {
+  const sim::SceneProblems problems = sim::checkScene(world, config);
+  for (const auto& w : problems.warnings) std::cerr << "terrain: warning: " << scene.string() << ": " << w << "\n";
+  if (!problems.errors.empty()) throw io::InputError(scene.string() + ": " + problems.errors.front());
+}
+
+// Simulates and reconstructs a generated scene of `type` and `seed`, or with a non-empty
+// scene_file that scene as it is (not copied: its files must stay where they are for 'evaluate').
 nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int frames, const sim::SimConfig& sim_cfg,
                            const PipelineConfig& pipe_cfg, const fs::path& out, bool force, bool quiet,
-                           const eval::EvaluationOptions& scoring, const LidarChoice* lidar = nullptr) {
+                           const eval::EvaluationOptions& scoring, const LidarChoice* lidar = nullptr,
+                           const fs::path& scene_file = {}) {
   sim::validate(sim_cfg);  // bad settings are refused before anything is written
+  std::shared_ptr<sim::World> world;
+  if (!scene_file.empty()) {
+    world = std::make_shared<sim::World>(scene_file);
+    checkSceneOrThrow(*world, sim_cfg, scene_file);
+    refuseInputInside(out, scene_file, "--scene");
+  }
   // everything goes into a staged directory that replaces out only once the run is complete
   io::StagedDirectory staged(out, force);
   const fs::path dir = staged.path();
-  scenes::SceneConfig scene_cfg;
-  scene_cfg.type = type;
-  scene_cfg.seed = seed;
-  const fs::path scene_path = dir / "scene" / (type + "_" + std::to_string(seed) + ".xml");
-  scenes::writeScene(scenes::generateScene(scene_cfg), scene_path, true);
-  auto world = std::make_shared<sim::World>(scene_path);
+  if (!world) {
+    scenes::SceneConfig scene_cfg;
+    scene_cfg.type = type;
+    scene_cfg.seed = seed;
+    const fs::path scene_path = dir / "scene" / (type + "_" + std::to_string(seed) + ".xml");
+    scenes::writeScene(scenes::generateScene(scene_cfg), scene_path, true);
+    world = std::make_shared<sim::World>(scene_path);
+  }
   nlohmann::json report;
   if (lidar && !lidar->endpoint.empty()) {
     // camera, GPS and gyro simulated, the lidar from packets (for example 'terrain stream --scene')
@@ -591,6 +610,7 @@ std::uintmax_t recordingFrameBytes(const sim::SimulatedRig& rig) {
 int record(const fs::path& scene_path, int frames, const fs::path& out, bool force, const sim::SimConfig& config,
            bool with_pcap) {
   auto world = std::make_shared<sim::World>(scene_path);
+  checkSceneOrThrow(*world, config, scene_path);
   sim::SimulatedRig rig(world, config, frames);
   nlohmann::json producer;
   producer["scene"] = fs::absolute(scene_path).string();
@@ -890,10 +910,20 @@ int main(int argc, char** argv) {
   bool run_force = false;
   sim::SimConfig run_sim;
   std::string sim_config_file = isSubcommand(argc, argv, "run") ? preScan(argc, argv, "--sim-config") : "";
-  run->add_option("--scenario", run_scenario, "terrain type of the generated scene")->capture_default_str()->check(CLI::IsMember(scenes::sceneTypes()));
-  run->add_option("--seed", run_seed, "scene seed, >= 0 (the sensor noise seed is --noise-seed)")
-      ->capture_default_str()
-      ->check(kSeed);
+  fs::path run_scene;
+  auto* run_scenario_opt = run->add_option("--scenario", run_scenario, "terrain type of the generated scene")
+                               ->capture_default_str()
+                               ->check(CLI::IsMember(scenes::sceneTypes()));
+  auto* run_seed_opt = run->add_option("--seed", run_seed, "scene seed, >= 0 (the sensor noise seed is --noise-seed)")
+                           ->capture_default_str()
+                           ->check(kSeed);
+  run->add_option("--scene", run_scene,
+                  "run on this scene (MJCF with its .truth.json sidecar) instead of a generated one; it is checked "
+                  "before the simulation (terrain under the path: an error; no skybox, the path within a metre of an "
+                  "object, nothing above the lidar's reach: warnings) and used where it is")
+      ->check(CLI::ExistingFile)
+      ->excludes(run_scenario_opt)
+      ->excludes(run_seed_opt);
   run->add_option("--frames", run_frames, "lidar sweeps to simulate, 1-" + std::to_string(kMaxFrames))
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
@@ -1010,6 +1040,11 @@ int main(int argc, char** argv) {
       const auto producer = nlohmann::json::parse(dataset->producerJson());
       if (producer.contains("scene") && producer["scene"].is_string() && fs::exists(producer["scene"].get<std::string>())) {
         world = std::make_shared<sim::World>(producer["scene"].get<std::string>());
+      } else if (producer.contains("scene") && producer["scene"].is_string()) {
+        std::cerr << "terrain: warning: not scored: the scene the dataset was recorded from, "
+                  << producer["scene"].get<std::string>() << ", is no longer there (put it back to score the run)\n";
+      } else {
+        std::cerr << "terrain: note: not scored: the dataset names no scene to score it against\n";
       }
       refuseInputInside(recon_out, recon_input, "--input");
       if (lidar_choice.endpoint.empty()) {
@@ -1035,7 +1070,7 @@ int main(int argc, char** argv) {
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       if (!lidar_choice.endpoint.empty()) rig::LidarEndpoint::parse(lidar_choice.endpoint);
       runScenario(run_scenario, run_seed, run_frames, run_sim, pipe_cfg, run_out, run_force, false, scoring,
-                  &lidar_choice);
+                  &lidar_choice, run_scene);
       return 0;
     }
     if (kitti->parsed()) {

@@ -24,7 +24,13 @@ CameraRenderer::CameraRenderer(const World& world, const CameraMount& config)
     : world_(world), config_(config), gl_(std::make_unique<Gl>()) {
   model_ = mj_copyModel(nullptr, world.model());
   camera_ = mj_name2id(model_, mjOBJ_CAMERA, "robot_camera");
-  if (camera_ < 0) throw io::InputError("scene has no camera named 'robot_camera'");
+  if (camera_ < 0) {
+    throw io::InputError(
+        "scene has no camera named 'robot_camera': the simulated rig renders every camera of the rig through it, "
+        "placing it at each camera's pose; add <camera name=\"robot_camera\" pos=\"0.1 0 1.6\" xyaxes=\"0 -1 0 0 0 "
+        "1\"/> to the robot's body (<body name=\"robot\" mocap=\"true\">), as generated scenes have it, or record "
+        "with --no-camera");
+  }
   model_->cam_fovy[camera_] = config.fovy_deg;
   model_->vis.global.offwidth = config.width;
   model_->vis.global.offheight = config.height;

@@ -1,0 +1,24 @@
+#pragma once
+// What is wrong with a scene for the testbed, found before any simulation: a path with no terrain
+// under it (an error), and what would make a run silently poor (warnings): no skybox (the sky
+// renders black and boundary estimation's sky test rejects every top), a path through or within a
+// metre of an object (the robot would drive into it; its sweeps lose whole sectors), nothing taller
+// than the lidar's reach (nothing for the method to recover).
+
+#include "sim/sim_config.hpp"
+#include "sim/world.hpp"
+
+#include <string>
+#include <vector>
+
+namespace terrain::sim {
+
+struct SceneProblems {
+  std::vector<std::string> errors;    // the scene cannot be simulated as it is
+  std::vector<std::string> warnings;  // it can, but a run would tell little
+};
+
+// Checks the scene's path (sampled every 0.5 m) and objects against the rig of `config`.
+SceneProblems checkScene(const World& world, const SimConfig& config);
+
+}  // namespace terrain::sim
