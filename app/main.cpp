@@ -26,6 +26,7 @@
 #include "rig/velodyne_source.hpp"
 #include "scenes/scene_generator.hpp"
 #include "sim/scene_checks.hpp"
+#include "sim/scene_import.hpp"
 #include "sim/simulated_rig.hpp"
 
 #include <CLI/CLI.hpp>
@@ -590,6 +591,71 @@ nlohmann::json runScenario(const std::string& type, std::uint64_t seed, int fram
   return report;
 }
 
+// numbers separated by `sep`; throws io::InputError naming the option
+std::vector<double> numbersIn(const std::string& text, char sep, const std::string& option) {
+  std::vector<double> out;
+  std::istringstream in(text);
+  for (std::string item; std::getline(in, item, sep);) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || item.find_first_not_of(" ", used) != std::string::npos || !std::isfinite(v))
+      throw io::InputError(option + " '" + text + "': '" + item + "' is not a number");
+    out.push_back(v);
+  }
+  return out;
+}
+
+int importScene(const fs::path& world, const fs::path& out, const fs::path& classes, const std::string& path,
+                const std::string& origin, bool force) {
+  sim::ImportOptions options;
+  if (!classes.empty()) sim::loadImportPatterns(classes, options);
+  for (std::istringstream in(path); !path.empty();) {
+    std::string point;
+    if (!std::getline(in, point, ';')) break;
+    const auto xy = numbersIn(point, ',', "--path");
+    if (xy.size() != 2) throw io::InputError("--path '" + path + "': '" + point + "' is not x,y");
+    options.path.emplace_back(xy[0], xy[1]);
+  }
+  if (!path.empty() && options.path.size() < 2) throw io::InputError("--path '" + path + "': needs at least 2 waypoints");
+  const auto o = numbersIn(origin, ',', "--origin");
+  if (o.size() != 3 || std::abs(o[0]) > 90 || std::abs(o[1]) > 180)
+    throw io::InputError("--origin '" + origin + "': expected latitude,longitude,altitude within [-90, 90] and [-180, 180] deg");
+  options.origin = {o[0], o[1], o[2]};
+  const fs::path sidecar = scenes::truthPathFor(out);
+  for (const fs::path& f : {out, sidecar}) {
+    if (fs::exists(f) && !force) throw io::InputError(f.string() + ": exists (pass --force to overwrite it)");
+  }
+  if (fs::absolute(out).lexically_normal() == fs::absolute(world).lexically_normal())
+    throw io::InputError(out.string() + ": is the world itself; write the scene to another file");
+  const sim::ImportedScene scene = sim::importScene(world, out, options);
+  if (!fs::absolute(out).parent_path().empty()) fs::create_directories(fs::absolute(out).parent_path());
+  io::writeFileAtomic(out, scene.mjcf, true);
+  io::writeFileAtomic(sidecar, scenes::truthToJson(scene.truth), true);
+  std::map<std::string, int> by_class;
+  for (const auto& ob : scene.truth.objects) ++by_class[scenes::className(ob.object_class)];
+  std::cout << "wrote " << out.string() << " and " << sidecar.string() << ": " << scene.truth.objects.size() << " objects (";
+  const char* sep = "";
+  for (const auto& [cls, n] : by_class) std::cout << sep << n << " " << cls, sep = ", ";
+  std::cout << "), terrain '" << scene.truth.terrain.geom << "' (" << scene.truth.terrain.kind << "), path of "
+            << scene.truth.path.size() << " waypoints with " << scene.path_clearance << " m to the nearest object\n";
+  for (const auto& a : scene.added) std::cout << "  added " << a << "\n";
+  if (!scene.unclassified.empty()) {
+    std::cout << "  " << scene.unclassified.size() << " geom(s) no pattern classed (scored as neither ground nor object; "
+              << "give --classes patterns that match them):";
+    for (const auto& u : scene.unclassified) std::cout << " " << u;
+    std::cout << "\n";
+  }
+  // the scene as 'run --scene' will see it
+  const sim::World loaded(out);
+  checkSceneOrThrow(loaded, sim::SimConfig{}, out);
+  return 0;
+}
+
 int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool force) {
   const scenes::GeneratedScene scene = scenes::generateScene(cfg);
   scenes::writeScene(scene, out, force);
@@ -809,6 +875,31 @@ int main(int argc, char** argv) {
   gen->add_option("--out", scene_out, "output MJCF file")->required();
   gen->add_flag("--force", scene_force, "overwrite existing files");
 
+  // terrain scenes import
+  CLI::App* imp = scenes_cmd->add_subcommand(
+      "import", "make a MuJoCo world of your own a testbed scene: SCENE.xml (the world, plus a skybox, a light and the "
+                "robot with its camera where it has none) and SCENE.truth.json (objects classed from geom names)");
+  fs::path imp_world, imp_out, imp_classes;
+  std::string imp_path, imp_origin = "0,0,0";
+  bool imp_force = false;
+  imp->add_option("--mjcf", imp_world, "the world (MJCF)")->required()->check(CLI::ExistingFile);
+  imp->add_option("--out", imp_out, "the scene to write (MJCF; its sidecar beside it); in the world's folder when the world "
+                                     "names files (heightfields, meshes, textures)")->required();
+  imp->add_option("--classes", imp_classes,
+                  "YAML map of class (building, crown, trunk, terrain) to name patterns (case-insensitive substrings of "
+                  "a geom's, its material's or its body's name), each replacing that class's defaults: building: build, "
+                  "bldg, house, hall, tower, shed, garage, facade, roof; crown: crown, leaf, leaves, foliage, canopy, "
+                  "bush, tree; trunk: trunk, bark, stem (checked first: tree_trunk is a trunk); terrain: ground, terrain, floor, "
+                  "heightfield, hfield")
+      ->check(CLI::ExistingFile);
+  imp->add_option("--path", imp_path,
+                  "the robot's path as waypoints \"x,y;x,y;...\" [m, world]; default: the straight line along x, 90 % of "
+                  "the terrain long, nearest the terrain's middle with 3.35 m of room to every object (else the one "
+                  "with the most room, at least 1.35 m: the robot's half width and a metre)");
+  imp->add_option("--origin", imp_origin, "the world origin on the globe: latitude,longitude [deg],altitude [m]")
+      ->capture_default_str();
+  imp->add_flag("--force", imp_force, "overwrite an existing scene and sidecar");
+
   // terrain record
   CLI::App* rec = app.add_subcommand("record", "drive a scene with the simulated rig and write a dataset");
   sim::SimConfig sim_cfg;
@@ -1004,6 +1095,7 @@ int main(int argc, char** argv) {
   app::installInterruptHandlers();
   try {
     if (gen->parsed()) return generateScene(scene_cfg, scene_out, scene_force);
+    if (imp->parsed()) return importScene(imp_world, imp_out, imp_classes, imp_path, imp_origin, imp_force);
     if (const int rc = app::runLidarCommands(*lidar_cmds); rc >= 0) return rc;
     if (rec->parsed()) return record(rec_scene, rec_frames, rec_out, rec_force, sim_cfg, rec_pcap);
     if (evalc->parsed()) {
