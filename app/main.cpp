@@ -903,7 +903,12 @@ int main(int argc, char** argv) {
   // terrain record
   CLI::App* rec = app.add_subcommand("record", "drive a scene with the simulated rig and write a dataset");
   sim::SimConfig sim_cfg;
-  std::string config_file = isSubcommand(argc, argv, "record") ? preScan(argc, argv, "--config") : "";
+  // record's sim YAML is --sim-config, as for run and stream (--config, its older name, still reads it)
+  std::string config_file;
+  if (isSubcommand(argc, argv, "record")) {
+    config_file = preScan(argc, argv, "--sim-config");
+    if (config_file.empty()) config_file = preScan(argc, argv, "--config");
+  }
   fs::path rec_scene, rec_out;
   int rec_frames = 60;
   bool rec_force = false;
@@ -926,7 +931,7 @@ int main(int argc, char** argv) {
     std::cerr << "terrain: error: " << e.what() << "\n";
     return 2;
   }
-  addSimOptions(*rec, sim_cfg, config_file, "--config");
+  addSimOptions(*rec, sim_cfg, config_file, "--sim-config,--config");
 
   // terrain reconstruct
   CLI::App* recon = app.add_subcommand("reconstruct", "run the pipeline over a recorded dataset");
@@ -988,7 +993,7 @@ int main(int argc, char** argv) {
   strm->add_option("--frames", strm_frames, "sweeps to simulate with --scene, 1-" + std::to_string(kMaxFrames))
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
-  strm->add_option("--sim-config", strm_sim_config, "YAML simulation settings for --scene (as for 'terrain record --config')");
+  strm->add_option("--sim-config", strm_sim_config, "YAML simulation settings for --scene (as for 'terrain record --sim-config')");
   strm->add_option("--to", strm_to, "destination HOST:PORT (HOST an IPv4 address or localhost)")->capture_default_str();
   strm->add_option("--speed", strm_speed, "pace relative to the real sensor (2: twice as fast), in (0, 100]")->capture_default_str();
 
@@ -1033,7 +1038,7 @@ int main(int argc, char** argv) {
   addPipelineOptions(*recon, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
   addPipelineOptions(*run, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
   run->add_option("--noise-seed", run_sim.seed, "sensor noise seed (>= 0)")->capture_default_str()->check(kSeed);
-  run->add_option("--sim-config", sim_config_file, "YAML file with simulation settings (as for 'terrain record --config')");
+  run->add_option("--sim-config", sim_config_file, "YAML file with simulation settings (as for 'terrain record --sim-config')");
   run->add_option("--speed", run_sim.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
   run->add_option("--height-cap", run_sim.lidar.height_cap, "lidar returns higher than this above the sensor are dropped [m]")
       ->capture_default_str();
