@@ -9,7 +9,15 @@ namespace terrain::sim {
 
 namespace {
 
-// distance [m] from p to the polygon's boundary, 0 inside it
+std::string metres(double v) {
+  std::ostringstream s;
+  s.precision(3);
+  s << v << " m";
+  return s.str();
+}
+
+}  // namespace
+
 double distanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
   bool inside = false;
   double best = std::numeric_limits<double>::infinity();
@@ -24,15 +32,6 @@ double distanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::
   }
   return inside ? 0.0 : best;
 }
-
-std::string metres(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v << " m";
-  return s.str();
-}
-
-}  // namespace
 
 SceneProblems checkScene(const World& world, const SimConfig& config) {
   SceneProblems out;

@@ -18,6 +18,9 @@ struct SceneProblems {
   std::vector<std::string> warnings;  // it can, but a run would tell little
 };
 
+// [m] from p to the polygon's outline (any orientation), 0 inside it.
+double distanceToPolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p);
+
 // Checks the scene's path (sampled every 0.5 m) and objects against the rig of `config`.
 SceneProblems checkScene(const World& world, const SimConfig& config);
 

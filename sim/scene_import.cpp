@@ -2,6 +2,7 @@
 
 #include "rig/file_io.hpp"
 #include "sim/hfield_ray.hpp"
+#include "sim/scene_checks.hpp"
 
 #include <mujoco/mujoco.h>
 #include <tinyxml2.h>
@@ -50,27 +51,6 @@ std::vector<Point2> hull(std::vector<Point2> p) {
   }
   h.resize(k - 1);
   return h;
-}
-
-bool inside(const std::vector<Point2>& poly, const Point2& p) {
-  bool in = false;
-  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
-        p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) + poly[i].x())
-      in = !in;
-  }
-  return in;
-}
-
-double distance(const std::vector<Point2>& poly, const Point2& p) {
-  if (inside(poly, p)) return 0;
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    const Point2 ab = poly[j] - poly[i];
-    const double t = ab.squaredNorm() > 0 ? std::clamp((p - poly[i]).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-    best = std::min(best, (poly[i] + t * ab - p).norm());
-  }
-  return best;
 }
 
 Point2 centroid(const std::vector<Point2>& poly) {
@@ -245,8 +225,8 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
   std::iota(parent.begin(), parent.end(), 0);
   const std::function<std::size_t(std::size_t)> root = [&](std::size_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
   const auto touch = [](const Geom& a, const Geom& b) {
-    for (const auto& p : a.outline) if (distance(b.outline, p) <= 0.1) return true;
-    for (const auto& p : b.outline) if (distance(a.outline, p) <= 0.1) return true;
+    for (const auto& p : a.outline) if (distanceToPolygon(b.outline, p) <= 0.1) return true;
+    for (const auto& p : b.outline) if (distanceToPolygon(a.outline, p) <= 0.1) return true;
     return false;
   };
   for (std::size_t i = 0; i < geoms.size(); ++i) {
@@ -280,7 +260,7 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     std::size_t best = groups.size();
     double best_d = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < groups.size(); ++k) {
-      if (groups[k].cls != "crown" || !inside(groups[k].footprint, c)) continue;
+      if (groups[k].cls != "crown" || distanceToPolygon(groups[k].footprint, c) > 0) continue;
       const double dist = (centroid(groups[k].footprint) - c).norm();
       if (dist < best_d) best_d = dist, best = k;
     }
@@ -318,7 +298,7 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
   // room from a point to the nearest footprint
   const auto room = [&](const Point2& p) {
     double r = std::numeric_limits<double>::infinity();
-    for (const auto& o : t.objects) r = std::min(r, distance(o.footprint, p));
+    for (const auto& o : t.objects) r = std::min(r, distanceToPolygon(o.footprint, p));
     return r;
   };
   const double need = 0.35 + options.clearance;
