@@ -149,11 +149,12 @@ function start() {
   holder.appendChild(renderer.domElement);
   const camera = new THREE.PerspectiveCamera(50, width / height, 0.5, 5000);
   camera.up.set(0, 0, 1);
-  const centre = new THREE.Vector3(data.x0 + 0.5 * data.cols * data.cell, data.y0 + 0.5 * data.rows * data.cell, data.lo);
+  // looking at the middle of what was mapped (the mean of its vertices), from the south-west and above
   const reach = Math.max(data.cols, data.rows) * data.cell;
-  const start = data.path.length ? data.path[0] : [centre.x, centre.y, centre.z];
-  centre.set(start[0], start[1], start[2]);
-  camera.position.set(start[0] - 0.45 * reach, start[1] - 0.45 * reach, start[2] + 0.35 * reach);
+  const centre = new THREE.Vector3(0, 0, 0);
+  for (let v = 0; v < count; ++v) centre.x += xy[2 * v] / count, centre.y += xy[2 * v + 1] / count;
+  centre.z = data.path.length ? data.path[0][2] : data.lo;
+  camera.position.set(centre.x - 0.4 * reach, centre.y - 0.4 * reach, centre.z + 0.3 * reach);
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.copy(centre);
   controls.update();
