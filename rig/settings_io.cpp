@@ -35,10 +35,17 @@ void applySettings(const std::filesystem::path& path, const std::map<std::string
                        e.msg + ")");
     }
   };
+  // a key is a plain scalar ('? [a, b]: 1' or an empty '? :' is no setting's name)
+  const auto keyOf = [&](const YAML::Node& key) {
+    if (!key.IsScalar() || key.Scalar().empty()) {
+      throw InputError(path.string() + ":" + std::to_string(key.Mark().line + 1) + ": a key that is not a setting's name");
+    }
+    return key.Scalar();
+  };
   for (const auto& kv : root) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = keyOf(kv.first);
     if (kv.second.IsMap()) {
-      for (const auto& inner : kv.second) apply(key + "." + inner.first.as<std::string>(), inner.second);
+      for (const auto& inner : kv.second) apply(key + "." + keyOf(inner.first), inner.second);
     } else {
       apply(key, kv.second);
     }

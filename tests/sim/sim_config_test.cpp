@@ -126,6 +126,12 @@ TEST(SimConfigTest, BadFilesAreNamedWithTheLineAndField) {
             std::string::npos)
       << errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n");
   EXPECT_NE(errorOf(dir, "seed: 1\nrobot:\n  speed: 1\nseed: 2\n").find("'seed' is given twice"), std::string::npos);
+  // keys that are no setting's name: an empty complex key (found by scripts/fuzz's config target,
+  // whose YAML exception escaped), a sequence as a key, and one inside a section
+  EXPECT_NE(errorOf(dir, "? :\b :").find("sim.yaml:1: a key that is not a setting's name"), std::string::npos)
+      << errorOf(dir, "? :\b :");
+  EXPECT_NE(errorOf(dir, "? [a, b]\n: 1\n").find("sim.yaml:1: a key that is not"), std::string::npos);
+  EXPECT_NE(errorOf(dir, "robot:\n  ? [x]\n  : 1\n").find("sim.yaml:2: a key that is not"), std::string::npos);
 }
 
 }  // namespace
