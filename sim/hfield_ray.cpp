@@ -160,4 +160,22 @@ double rayHfield(const mjModel* m, const mjData* d, int id, const mjtNum pnt[3],
   return x;
 }
 
+double heightAboveGeoms(const mjModel* m, const mjData* d) {
+  double top = 0;
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (m->geom_type[g] == mjGEOM_PLANE) continue;
+    top = std::max(top, d->geom_xpos[3 * g + 2] + m->geom_rbound[g]);
+  }
+  return top + 10.0;
+}
+
+double terrainHeightAt(const mjModel* m, const mjData* d, int terrain_geom, double from, double x, double y) {
+  const mjtNum pnt[3] = {x, y, from}, down[3] = {0, 0, -1};
+  const int type = m->geom_type[terrain_geom];
+  const mjtNum dist = type == mjGEOM_HFIELD ? rayHfield(m, d, terrain_geom, pnt, down)
+                                            : mju_rayGeom(d->geom_xpos + 3 * terrain_geom, d->geom_xmat + 9 * terrain_geom,
+                                                          m->geom_size + 3 * terrain_geom, pnt, down, type);
+  return dist < 0 ? std::numeric_limits<double>::quiet_NaN() : from - dist;
+}
+
 }  // namespace terrain::sim

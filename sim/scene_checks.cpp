@@ -62,8 +62,7 @@ SceneProblems checkScene(const World& world, const SimConfig& config) {
       }
     }
   }
-  const double clearance = 1.0;  // [m] between the robot's side and an object
-  const double half_track = 0.35 + clearance;
+  const double half_track = kRobotHalfWidth + kPathClearance;
   for (const auto& o : truth.objects) {
     if (o.footprint.size() < 3) continue;
     double nearest = std::numeric_limits<double>::infinity();

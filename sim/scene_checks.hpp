@@ -13,6 +13,10 @@
 
 namespace terrain::sim {
 
+// [m] half the robot's track, and the least room the checks want between its side and an object
+constexpr double kRobotHalfWidth = 0.35;
+constexpr double kPathClearance = 1.0;
+
 struct SceneProblems {
   std::vector<std::string> errors;    // the scene cannot be simulated as it is
   std::vector<std::string> warnings;  // it can, but a run would tell little

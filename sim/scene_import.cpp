@@ -163,20 +163,9 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     t.terrain.kind = "plane";
     half_x = m->geom_size[3 * terrain], half_y = m->geom_size[3 * terrain + 1];
   }
-  // the terrain's height at (x, y): a ray down against it alone (nan off it)
-  const double above = [&] {
-    double top = 0;
-    for (int g = 0; g < m->ngeom; ++g) top = std::max(top, d->geom_xpos[3 * g + 2] + m->geom_rbound[g]);
-    return top + 10;
-  }();
-  const auto terrainHeight = [&](double x, double y) {
-    const mjtNum pnt[3] = {x, y, above}, down[3] = {0, 0, -1};
-    const double dist = m->geom_type[terrain] == mjGEOM_HFIELD
-                            ? rayHfield(m, d, terrain, pnt, down)
-                            : mju_rayGeom(d->geom_xpos + 3 * terrain, d->geom_xmat + 9 * terrain, m->geom_size + 3 * terrain, pnt,
-                                          down, mjGEOM_PLANE);
-    return dist < 0 ? std::numeric_limits<double>::quiet_NaN() : above - dist;
-  };
+  // the terrain's height at (x, y) (NaN off it)
+  const double above = heightAboveGeoms(m, d);
+  const auto terrainHeight = [&](double x, double y) { return terrainHeightAt(m, d, terrain, above, x, y); };
 
   // every other geom outside the robot: its class, outline and top
   std::vector<Geom> geoms;
@@ -301,7 +290,7 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     for (const auto& o : t.objects) r = std::min(r, distanceToPolygon(o.footprint, p));
     return r;
   };
-  const double need = 0.35 + options.clearance;
+  const double need = kRobotHalfWidth + options.clearance;
   if (!options.path.empty()) {
     t.path = options.path;
   } else {

@@ -8,6 +8,7 @@
 // with room to spare.
 
 #include "scenes/scene_truth.hpp"
+#include "sim/scene_checks.hpp"
 
 #include <Eigen/Core>
 
@@ -28,7 +29,7 @@ struct ImportOptions {
   };
   std::vector<Eigen::Vector2d> path;  // [m] waypoints; empty: found
   GeodeticOrigin origin{0, 0, 0};  // where the world origin lies (latitude, longitude [deg], altitude [m])
-  double clearance = 1.0;  // [m] the least room between the robot's side (0.35 m out) and an object
+  double clearance = kPathClearance;  // [m] the least room between the robot's side and an object
 };
 
 struct ImportedScene {

@@ -76,12 +76,7 @@ void World::finishLoading() {
   terrain_geom_ = mj_name2id(model_, mjOBJ_GEOM, truth_.terrain.geom.c_str());
   if (terrain_geom_ < 0) throw io::InputError("scene has no terrain geom named '" + truth_.terrain.geom + "'");
   // a start height above everything in the scene, for downward rays
-  double top = 0;
-  for (int g = 0; g < model_->ngeom; ++g) {
-    if (model_->geom_type[g] == mjGEOM_PLANE) continue;
-    top = std::max(top, data_->geom_xpos[3 * g + 2] + model_->geom_rbound[g]);
-  }
-  top_z_ = top + 10.0;
+  top_z_ = heightAboveGeoms(model_, data_);
   caster_ = std::make_unique<RayCaster>(model_, data_, robot_body_);
 }
 
@@ -97,16 +92,7 @@ std::vector<std::string> World::unclassifiedGeoms() const {
 }
 
 double World::terrainHeight(double x, double y) const {
-  const mjtNum pnt[3] = {x, y, top_z_}, down[3] = {0, 0, -1};
-  const int type = model_->geom_type[terrain_geom_];
-  mjtNum d = -1;
-  if (type == mjGEOM_HFIELD) {
-    d = rayHfield(model_, data_, terrain_geom_, pnt, down);
-  } else {
-    d = mju_rayGeom(data_->geom_xpos + 3 * terrain_geom_, data_->geom_xmat + 9 * terrain_geom_,
-                    model_->geom_size + 3 * terrain_geom_, pnt, down, type);
-  }
-  return d < 0 ? std::numeric_limits<double>::quiet_NaN() : top_z_ - d;
+  return terrainHeightAt(model_, data_, terrain_geom_, top_z_, x, y);
 }
 
 double World::surfaceHeight(double x, double y, int* geom) const {
