@@ -10,7 +10,7 @@ namespace terrain::app {
 
 namespace {
 
-constexpr std::uint32_t kMagic = 0x46546C67;     // "glTF"
+constexpr std::uint32_t kMagic = 0x46546C67;      // "glTF"
 constexpr std::uint32_t kJsonChunk = 0x4E4F534A;  // "JSON"
 constexpr std::uint32_t kBinChunk = 0x004E4942;   // "BIN\0"
 constexpr int kFloat = 5126, kUnsignedByte = 5121, kUnsignedInt = 5125;
@@ -22,7 +22,9 @@ void put(std::string& s, T v) {
 }
 
 // world ENU to glTF's y-up frame
-Eigen::Vector3f toGltf(const Vector3& p) { return {static_cast<float>(p.x()), static_cast<float>(p.z()), static_cast<float>(-p.y())}; }
+Eigen::Vector3f toGltf(const Vector3& p) {
+  return {static_cast<float>(p.x()), static_cast<float>(p.z()), static_cast<float>(-p.y())};
+}
 
 }  // namespace
 
@@ -70,24 +72,33 @@ std::string encodeGlb(const GlbMesh& mesh) {
   j["scene"] = 0;
   j["scenes"] = json::array({{{"nodes", {0}}}});
   j["nodes"] = json::array({{{"mesh", 0}, {"name", mesh.name}}});
-  j["materials"] = json::array({{{"name", "vertex colours"},
-                                 {"doubleSided", true},
-                                 {"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}}});
+  j["materials"] =
+      json::array({{{"name", "vertex colours"},
+                    {"doubleSided", true},
+                    {"pbrMetallicRoughness",
+                     {{"baseColorFactor", {1, 1, 1, 1}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}}});
   json primitive = {{"attributes", {{"POSITION", 0}, {"NORMAL", 1}, {"COLOR_0", 2}}}, {"mode", 4}, {"material", 0}};
   if (!mesh.triangles.empty()) primitive["indices"] = 3;
   j["meshes"] = json::array({{{"name", mesh.name}, {"primitives", {primitive}}}});
   j["buffers"] = json::array({{{"byteLength", bin.size()}}});
-  json views = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 12 * n}, {"target", kArrayBuffer}},
-                            {{"buffer", 0}, {"byteOffset", normals_at}, {"byteLength", 12 * n}, {"target", kArrayBuffer}},
-                            {{"buffer", 0}, {"byteOffset", colours_at}, {"byteLength", 4 * n}, {"target", kArrayBuffer}}});
+  json views =
+      json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 12 * n}, {"target", kArrayBuffer}},
+                   {{"buffer", 0}, {"byteOffset", normals_at}, {"byteLength", 12 * n}, {"target", kArrayBuffer}},
+                   {{"buffer", 0}, {"byteOffset", colours_at}, {"byteLength", 4 * n}, {"target", kArrayBuffer}}});
   json accessors = json::array(
-      {{{"bufferView", 0}, {"componentType", kFloat}, {"count", n}, {"type", "VEC3"},
-        {"min", n ? json{lo.x(), lo.y(), lo.z()} : json{0, 0, 0}}, {"max", n ? json{hi.x(), hi.y(), hi.z()} : json{0, 0, 0}}},
+      {{{"bufferView", 0},
+        {"componentType", kFloat},
+        {"count", n},
+        {"type", "VEC3"},
+        {"min", n ? json{lo.x(), lo.y(), lo.z()} : json{0, 0, 0}},
+        {"max", n ? json{hi.x(), hi.y(), hi.z()} : json{0, 0, 0}}},
        {{"bufferView", 1}, {"componentType", kFloat}, {"count", n}, {"type", "VEC3"}},
        {{"bufferView", 2}, {"componentType", kUnsignedByte}, {"normalized", true}, {"count", n}, {"type", "VEC4"}}});
   if (!mesh.triangles.empty()) {
-    views.push_back({{"buffer", 0}, {"byteOffset", indices_at}, {"byteLength", indices_bytes}, {"target", kElementArrayBuffer}});
-    accessors.push_back({{"bufferView", 3}, {"componentType", kUnsignedInt}, {"count", 3 * mesh.triangles.size()}, {"type", "SCALAR"}});
+    views.push_back(
+        {{"buffer", 0}, {"byteOffset", indices_at}, {"byteLength", indices_bytes}, {"target", kElementArrayBuffer}});
+    accessors.push_back(
+        {{"bufferView", 3}, {"componentType", kUnsignedInt}, {"count", 3 * mesh.triangles.size()}, {"type", "SCALAR"}});
   }
   j["bufferViews"] = views;
   j["accessors"] = accessors;

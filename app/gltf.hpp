@@ -16,7 +16,7 @@
 namespace terrain::app {
 
 struct GlbMesh {
-  std::vector<Vector3> positions;                  // world ENU [m]
+  std::vector<Vector3> positions;                    // world ENU [m]
   std::vector<std::array<std::uint8_t, 3>> colours;  // per vertex, sRGB
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::string name = "terrain";

@@ -19,7 +19,8 @@ std::string base64(const std::vector<unsigned char>& data) {
   std::string out;
   out.reserve((data.size() + 2) / 3 * 4);
   for (std::size_t i = 0; i < data.size(); i += 3) {
-    const std::uint32_t n = (std::uint32_t{data[i]} << 16) | (i + 1 < data.size() ? std::uint32_t{data[i + 1]} << 8 : 0) |
+    const std::uint32_t n = (std::uint32_t{data[i]} << 16) |
+                            (i + 1 < data.size() ? std::uint32_t{data[i + 1]} << 8 : 0) |
                             (i + 2 < data.size() ? data[i + 2] : 0);
     out += table[(n >> 18) & 63];
     out += table[(n >> 12) & 63];
@@ -51,7 +52,9 @@ cv::Mat lineChart(const std::vector<std::pair<std::string, std::vector<double>>>
   cv::line(c, {l, h - b}, {w - 10, h - b}, cv::Scalar(0, 0, 0));
   cv::line(c, {l, t}, {l, h - b}, cv::Scalar(0, 0, 0));
   auto py = [&](double y) { return static_cast<int>(h - b - (h - b - t) * y / ymax); };
-  auto px = [&](std::size_t i) { return static_cast<int>(l + (w - 10 - l) * static_cast<double>(i) / std::max<std::size_t>(1, n - 1)); };
+  auto px = [&](std::size_t i) {
+    return static_cast<int>(l + (w - 10 - l) * static_cast<double>(i) / std::max<std::size_t>(1, n - 1));
+  };
   cv::line(c, {l, py(reference)}, {w - 10, py(reference)}, cv::Scalar(0, 0, 200), 1, cv::LINE_AA);
   cv::putText(c, title, {l, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   for (int k = 0; k <= 4; ++k) {
@@ -62,7 +65,8 @@ cv::Mat lineChart(const std::vector<std::pair<std::string, std::vector<double>>>
   const cv::Scalar colours[] = {{200, 80, 0}, {0, 150, 0}, {150, 0, 150}, {0, 120, 220}};
   int s = 0;
   for (const auto& [name, v] : series) {
-    for (std::size_t i = 1; i < v.size(); ++i) cv::line(c, {px(i - 1), py(v[i - 1])}, {px(i), py(v[i])}, colours[s % 4], 2, cv::LINE_AA);
+    for (std::size_t i = 1; i < v.size(); ++i)
+      cv::line(c, {px(i - 1), py(v[i - 1])}, {px(i), py(v[i])}, colours[s % 4], 2, cv::LINE_AA);
     cv::putText(c, name, {w - 240, t + 16 * (s + 1)}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colours[s % 4], 1, cv::LINE_AA);
     ++s;
   }
@@ -79,20 +83,24 @@ cv::Mat histogram(const std::vector<double>& before, const std::vector<double>& 
   };
   fill(before, hb);
   fill(after, ha);
-  const int top = std::max(1, std::max(*std::max_element(hb.begin(), hb.end()), *std::max_element(ha.begin(), ha.end())));
+  const int top =
+      std::max(1, std::max(*std::max_element(hb.begin(), hb.end()), *std::max_element(ha.begin(), ha.end())));
   const double bw = (w - l - 10.0) / bins;
   for (int i = 0; i < bins; ++i) {
     const int x = l + static_cast<int>(i * bw);
-    cv::rectangle(c, {x, h - b - (h - b - 30) * hb[i] / top}, {x + static_cast<int>(bw / 2), h - b}, cv::Scalar(180, 180, 180), cv::FILLED);
-    cv::rectangle(c, {x + static_cast<int>(bw / 2), h - b - (h - b - 30) * ha[i] / top}, {x + static_cast<int>(bw), h - b}, cv::Scalar(200, 80, 0), cv::FILLED);
+    cv::rectangle(c, {x, h - b - (h - b - 30) * hb[i] / top}, {x + static_cast<int>(bw / 2), h - b},
+                  cv::Scalar(180, 180, 180), cv::FILLED);
+    cv::rectangle(c, {x + static_cast<int>(bw / 2), h - b - (h - b - 30) * ha[i] / top},
+                  {x + static_cast<int>(bw), h - b}, cv::Scalar(200, 80, 0), cv::FILLED);
   }
   for (int k = 0; k <= 5; ++k) {
     char lab[32];
     std::snprintf(lab, sizeof lab, "%.0f m", lo + (hi - lo) * k / 5);
-    cv::putText(c, lab, {l + static_cast<int>((w - l - 10) * k / 5.0) - 10, h - 20}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(c, lab, {l + static_cast<int>((w - l - 10) * k / 5.0) - 10, h - 20}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
-  cv::putText(c, "height error of object vertices: grey sensed only, blue after recovery", {l, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(c, "height error of object vertices: grey sensed only, blue after recovery", {l, 20},
+              cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return c;
 }
 
@@ -112,8 +120,9 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     << "</title><style>body{font-family:sans-serif;max-width:1600px;margin:20px}table{border-collapse:collapse}"
        "td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}th{background:#eee}img{margin:4px;max-width:100%}"
        "</style></head><body><h1>"
-    << title << "</h1><p>" << r.value("frames", 0) << " frames, " << r.value("voxels", 0) << " voxels. Scene: "
-    << world.truth().type << " (seed " << world.truth().seed << ").</p>" << reportView(p, truth, world);
+    << title << "</h1><p>" << r.value("frames", 0) << " frames, " << r.value("voxels", 0)
+    << " voxels. Scene: " << world.truth().type << " (seed " << world.truth().seed << ").</p>"
+    << reportView(p, truth, world);
   // metrics
   if (r.contains("pose") && r["pose"].value("frames", 0) > 0) {
     const auto& pose = r["pose"];
@@ -130,15 +139,17 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
     if (!r["ground_segmentation"].contains(m)) continue;  // baselines not asked for
     const auto& g = r["ground_segmentation"][m];
-    h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(g["f1"]) << "</td><td>" << fmt(g["iou"]) << "</td><td>"
-      << fmt(g["precision"]) << "</td><td>" << fmt(g["recall"]) << "</td><td>" << fmt(g["per_point"]["f1"]) << "</td></tr>";
+    h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(g["f1"]) << "</td><td>" << fmt(g["iou"])
+      << "</td><td>" << fmt(g["precision"]) << "</td><td>" << fmt(g["recall"]) << "</td><td>"
+      << fmt(g["per_point"]["f1"]) << "</td></tr>";
   }
   h << "</table><h2>Object heights</h2><table><tr><th></th><th>cells</th><th>MAE m</th><th>RMSE m</th><th>bias m</th>"
        "<th>variance m&sup2;</th></tr>";
   const auto& hr = r["height_recovery"];
   auto row = [&](const std::string& name, const nlohmann::json& e) {
-    h << "<tr><td style=\"text-align:left\">" << name << "</td><td>" << e.value("cells", 0) << "</td><td>" << fmt(e["mae_m"])
-      << "</td><td>" << fmt(e["rmse_m"]) << "</td><td>" << fmt(e["bias_m"]) << "</td><td>" << fmt(e["variance_m2"]) << "</td></tr>";
+    h << "<tr><td style=\"text-align:left\">" << name << "</td><td>" << e.value("cells", 0) << "</td><td>"
+      << fmt(e["mae_m"]) << "</td><td>" << fmt(e["rmse_m"]) << "</td><td>" << fmt(e["bias_m"]) << "</td><td>"
+      << fmt(e["variance_m2"]) << "</td></tr>";
   };
   row("sensed only", hr["before"]);
   row("after boundary estimation", hr["after"]);
@@ -154,7 +165,8 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       std::string name = it.key();
       std::replace(name.begin(), name.end(), '_', ' ');
       row(name + ", sensed only", it.value()["before"]);
-      row(name + ", after (" + std::to_string(it.value()["raised_cells"].get<std::size_t>()) + " raised)", it.value()["after"]);
+      row(name + ", after (" + std::to_string(it.value()["raised_cells"].get<std::size_t>()) + " raised)",
+          it.value()["after"]);
     }
   }
   if (hr.contains("by_distance")) {
@@ -183,9 +195,9 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
       const auto& t = tops[kind];
       h << kind << "s at their real height (within 10 % of their height, at least 1 m): "
         << t["at_height_before"].get<std::size_t>() << " sensed only, " << t["at_height_after"].get<std::size_t>()
-        << " after recovery, of " << t["top_seen"].get<std::size_t>() << "; above it by more than that: "
-        << t["too_high_before"].get<std::size_t>() << " sensed only, " << t["too_high_after"].get<std::size_t>()
-        << " after recovery. ";
+        << " after recovery, of " << t["top_seen"].get<std::size_t>()
+        << "; above it by more than that: " << t["too_high_before"].get<std::size_t>() << " sensed only, "
+        << t["too_high_after"].get<std::size_t>() << " after recovery. ";
     }
     h << "Of those, seen in a frame that also saw their lower part (within " << eval::kLowerPart
       << " m of the base, where the lidar reaches; the method raises an object only from such a frame):";
@@ -200,26 +212,28 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     for (auto it = tops["list"].begin(); it != tops["list"].end(); ++it) {
       const auto& o = it.value();
       const bool ok = std::abs(o["error_m"].get<double>()) <= o["tolerance_m"].get<double>();
-      h << "<tr><td style=\"text-align:left\">" << it.key() << "</td><td>" << o["class"].get<std::string>() << "</td><td>"
-        << fmt(o["true_top_m"]) << "</td><td>" << fmt(o["sensed_top_m"]) << "</td><td>" << fmt(o["recovered_top_m"])
-        << "</td><td" << (ok ? "" : " style=\"color:#b00\"") << ">" << fmt(o["error_m"]) << "</td><td>"
-        << o["frames_top_seen"].get<int>() << " (" << o["frames_lower_part_seen_with_top"].get<int>() << ")</td><td>"
-        << o["cells"].get<std::size_t>() << "</td><td style=\"text-align:left\">"
-        << (o.contains("estimation_outcomes") ? largest(o["estimation_outcomes"]) : "") << "</td><td style=\"text-align:left\">";
+      h << "<tr><td style=\"text-align:left\">" << it.key() << "</td><td>" << o["class"].get<std::string>()
+        << "</td><td>" << fmt(o["true_top_m"]) << "</td><td>" << fmt(o["sensed_top_m"]) << "</td><td>"
+        << fmt(o["recovered_top_m"]) << "</td><td" << (ok ? "" : " style=\"color:#b00\"") << ">" << fmt(o["error_m"])
+        << "</td><td>" << o["frames_top_seen"].get<int>() << " (" << o["frames_lower_part_seen_with_top"].get<int>()
+        << ")</td><td>" << o["cells"].get<std::size_t>() << "</td><td style=\"text-align:left\">"
+        << (o.contains("estimation_outcomes") ? largest(o["estimation_outcomes"]) : "")
+        << "</td><td style=\"text-align:left\">";
       if (o.contains("crown") && o["crown"].is_object())
         h << largest(o["crown"]["outcomes"]) << ": " << o["crown"]["verdict"].get<std::string>();
       h << "</td></tr>";
     }
   }
-  h << "</table><h3>Height map over object cells</h3><table><tr><th>method</th><th>coverage</th><th>MAE m</th><th>bias m</th></tr>";
+  h << "</table><h3>Height map over object cells</h3><table><tr><th>method</th><th>coverage</th><th>MAE m</th><th>bias "
+       "m</th></tr>";
   for (const char* m : {"sensed_only", "inpainting", "boundary_estimation"}) {
     if (!r["height_baselines"].contains(m)) continue;
     const auto& b = r["height_baselines"][m];
-    h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(b["coverage"]) << "</td><td>" << fmt(b["mae_m"]) << "</td><td>"
-      << fmt(b["bias_m"]) << "</td></tr>";
+    h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(b["coverage"]) << "</td><td>"
+      << fmt(b["mae_m"]) << "</td><td>" << fmt(b["bias_m"]) << "</td></tr>";
   }
-  h << "</table><p>Boundary coverage: " << fmt(r["boundary_coverage_before"]) << " sensed only, " << fmt(r["boundary_coverage"])
-    << " after recovery (the paper reports 0.734 and 0.913 on its scenes).</p>";
+  h << "</table><p>Boundary coverage: " << fmt(r["boundary_coverage_before"]) << " sensed only, "
+    << fmt(r["boundary_coverage"]) << " after recovery (the paper reports 0.734 and 0.913 on its scenes).</p>";
   // height maps before / after / truth, one colour scale
   const auto& verts = p.mesh().vertices();
   if (!verts.empty()) {
@@ -264,10 +278,14 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   }
   // timing (Figure 11)
   std::vector<double> total, seg, voxels;
-  for (const auto& rec : p.records()) total.push_back(rec.total_ms), seg.push_back(rec.segmentation_ms), voxels.push_back(rec.voxels / 1000.0);
+  for (const auto& rec : p.records())
+    total.push_back(rec.total_ms), seg.push_back(rec.segmentation_ms), voxels.push_back(rec.voxels / 1000.0);
   h << "<h2>Timing per frame</h2>"
-    << img(lineChart({{"total", total}, {"ground segmentation", seg}}, 100.0, "processing time per frame (red: 100 ms sensing period)", "ms"), "timing")
-    << img(lineChart({{"voxels in the map (thousands)", voxels}}, 0.0, "voxels", "k"), "voxels") << "<table><tr><th>stage</th><th>median ms</th><th>p95 ms</th></tr>";
+    << img(lineChart({{"total", total}, {"ground segmentation", seg}}, 100.0,
+                     "processing time per frame (red: 100 ms sensing period)", "ms"),
+           "timing")
+    << img(lineChart({{"voxels in the map (thousands)", voxels}}, 0.0, "voxels", "k"), "voxels")
+    << "<table><tr><th>stage</th><th>median ms</th><th>p95 ms</th></tr>";
   for (auto it = r["timing"].begin(); it != r["timing"].end(); ++it) {
     if (!it.value().is_object()) continue;
     h << "<tr><td style=\"text-align:left\">" << it.key() << "</td><td>" << fmt(it.value()["median_ms"]) << "</td><td>"
@@ -282,7 +300,8 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     cv::cvtColor(c.rgb, bgr, cv::COLOR_RGB2BGR);
     for (int v = 1; v < c.segmentation.rows; ++v) {
       for (int u = 0; u < c.segmentation.cols; ++u) {
-        const int g = c.segmentation.at<std::uint16_t>(v, u) - 1, above = c.segmentation.at<std::uint16_t>(v - 1, u) - 1;
+        const int g = c.segmentation.at<std::uint16_t>(v, u) - 1,
+                  above = c.segmentation.at<std::uint16_t>(v - 1, u) - 1;
         if (g != above && scenes::isObjectClass(world.geomClass(g))) {
           bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(0, 220, 0);
         }
@@ -293,11 +312,14 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
     const double cell = p.map().voxelSize();
     for (const auto& m : verts) {
       if (!m.raised()) continue;
-      const auto px = project(k, camera_from_world * Point3((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell, m.height()));
-      if (px) cv::circle(bgr, {static_cast<int>(px->x()), static_cast<int>(px->y())}, 1, cv::Scalar(0, 0, 255), cv::FILLED);
+      const auto px =
+          project(k, camera_from_world * Point3((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell, m.height()));
+      if (px)
+        cv::circle(bgr, {static_cast<int>(px->x()), static_cast<int>(px->y())}, 1, cv::Scalar(0, 0, 255), cv::FILLED);
     }
     for (const auto& roof : p.roofCells()) {
-      const auto px = project(k, camera_from_world * Point3((roof.cell.x() + 0.5) * cell, (roof.cell.y() + 0.5) * cell, roof.height));
+      const auto px = project(
+          k, camera_from_world * Point3((roof.cell.x() + 0.5) * cell, (roof.cell.y() + 0.5) * cell, roof.height));
       if (px) bgr.at<cv::Vec3b>(static_cast<int>(px->y()), static_cast<int>(px->x())) = cv::Vec3b(0, 140, 255);
     }
     h << img(bgr, "frame " + std::to_string(c.frame) + ", camera " + p.calibration().cameras.at(c.camera).name);

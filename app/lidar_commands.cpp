@@ -35,17 +35,28 @@ void refuseCutOff(const std::string& file, const std::string& cut_off) {
 nlohmann::json lidarCountersJson(const rig::velodyne::DecodeStats& d, const rig::PositionStats& p,
                                  const rig::pcap::ReadStats& r) {
   nlohmann::json j;
-  j["data_packets"] = {{"offered", d.packets},        {"decoded", d.accepted},         {"lost", d.lost},
-                       {"rejected", d.rejected()},    {"wrong_size", d.wrong_size},    {"bad_block", d.bad_block},
-                       {"bad_position", d.bad_position}, {"bad_timestamp", d.bad_timestamp},
-                       {"duplicates", d.duplicates},  {"out_of_order", d.out_of_order}, {"dual", d.dual_packets}};
+  j["data_packets"] = {{"offered", d.packets},
+                       {"decoded", d.accepted},
+                       {"lost", d.lost},
+                       {"rejected", d.rejected()},
+                       {"wrong_size", d.wrong_size},
+                       {"bad_block", d.bad_block},
+                       {"bad_position", d.bad_position},
+                       {"bad_timestamp", d.bad_timestamp},
+                       {"duplicates", d.duplicates},
+                       {"out_of_order", d.out_of_order},
+                       {"dual", d.dual_packets}};
   j["points"] = d.points;
   j["second_returns"] = d.second_returns;
-  j["position_packets"] = {{"packets", p.packets},         {"fixes", p.fixes},           {"no_fix", p.no_fix},
-                           {"no_sentence", p.no_sentence}, {"bad_sentence", p.bad_sentence}, {"unreadable", p.unreadable},
+  j["position_packets"] = {{"packets", p.packets},
+                           {"fixes", p.fixes},
+                           {"no_fix", p.no_fix},
+                           {"no_sentence", p.no_sentence},
+                           {"bad_sentence", p.bad_sentence},
+                           {"unreadable", p.unreadable},
                            {"first_problem", p.first_problem}};
-  j["capture"] = {{"frames", r.frames},       {"sensor_datagrams", r.payloads}, {"other_traffic", r.other},
-                  {"ip_fragments", r.fragments}, {"malformed", r.malformed},   {"cut_off", r.error}};
+  j["capture"] = {{"frames", r.frames},          {"sensor_datagrams", r.payloads}, {"other_traffic", r.other},
+                  {"ip_fragments", r.fragments}, {"malformed", r.malformed},       {"cut_off", r.error}};
   return j;
 }
 
@@ -54,8 +65,8 @@ nlohmann::json captureJson(const rig::CaptureScan& scan) {
   j["file"] = scan.file.string();
   j["model"] = scan.model ? nlohmann::json(rig::velodyne::modelName(*scan.model)) : nlohmann::json(nullptr);
   j["calibration"] = scan.calibration;
-  j["return_mode_packets"] = {{"strongest", scan.packets_by_mode[0]}, {"last", scan.packets_by_mode[1]},
-                              {"dual", scan.packets_by_mode[2]}};
+  j["return_mode_packets"] = {
+      {"strongest", scan.packets_by_mode[0]}, {"last", scan.packets_by_mode[1]}, {"dual", scan.packets_by_mode[2]}};
   j["time_base_s"] = scan.time_base;
   j["time_base_source"] = scan.time_base_source;
   j["first_firing_s"] = scan.first_time;
@@ -69,8 +80,11 @@ nlohmann::json captureJson(const rig::CaptureScan& scan) {
   j["sweeps"] = sweeps;
   nlohmann::json fixes = nlohmann::json::array();
   for (const auto& f : scan.fixes) {
-    fixes.push_back({{"time_s", f.time}, {"latitude_deg", f.latitude_deg}, {"longitude_deg", f.longitude_deg},
-                     {"altitude_m", f.altitude_m}, {"sigma_m", f.sigma_m}});
+    fixes.push_back({{"time_s", f.time},
+                     {"latitude_deg", f.latitude_deg},
+                     {"longitude_deg", f.longitude_deg},
+                     {"altitude_m", f.altitude_m},
+                     {"sigma_m", f.sigma_m}});
   }
   j["gps_fixes"] = fixes;
   j["warnings"] = scan.warnings;
@@ -99,7 +113,8 @@ std::string timeText(double t) {
 
 void printScan(std::ostream& o, const rig::CaptureScan& scan) {
   o << "capture     " << scan.file.string() << "\n";
-  if (scan.model) o << "sensor      " << rig::velodyne::modelName(*scan.model) << " (from the packets' block ids and model byte)\n";
+  if (scan.model)
+    o << "sensor      " << rig::velodyne::modelName(*scan.model) << " (from the packets' block ids and model byte)\n";
   if (!scan.calibration.empty()) o << "calibration " << scan.calibration << "\n";
   const auto& d = scan.decode;
   o << "packets     " << d.packets << " data packets: " << d.accepted << " decoded, " << d.rejected() << " rejected, "
@@ -122,8 +137,8 @@ void printScan(std::ostream& o, const rig::CaptureScan& scan) {
     const auto& a = scan.fixes.front();
     const auto& b = scan.fixes.back();
     o << std::setprecision(7) << "            first " << a.latitude_deg << ", " << a.longitude_deg << " at "
-      << timeText(a.time) << "\n            last  " << b.latitude_deg << ", " << b.longitude_deg << " at " << timeText(b.time)
-      << "\n";
+      << timeText(a.time) << "\n            last  " << b.latitude_deg << ", " << b.longitude_deg << " at "
+      << timeText(b.time) << "\n";
   }
   o << "capture     " << scan.read.summary() << "\n";
   for (const auto& w : scan.warnings) o << "warning     " << w << "\n";
@@ -197,8 +212,9 @@ int convert(const LidarCommands& c) {
   io::writeFileAtomic(dir / "gps.csv", gps.str(), false);
   nlohmann::json j = captureJson(scan);
   j.erase("sweeps");  // in sweeps.csv
-  j["pcd_fields"] = "x y z intensity ring azimuth time: metres in the sensor frame (x forward, y left, z up), 0-255, "
-                    "laser id, encoder angle [rad], firing time [s] on the time base";
+  j["pcd_fields"] =
+      "x y z intensity ring azimuth time: metres in the sensor frame (x forward, y left, z up), 0-255, "
+      "laser id, encoder angle [rad], firing time [s] on the time base";
   io::writeFileAtomic(dir / "capture.json", j.dump(1) + "\n", false);
   out.commit();
   printScan(std::cout, scan);
@@ -211,7 +227,8 @@ int convert(const LidarCommands& c) {
 
 std::unique_ptr<LidarCommands> addLidarCommands(CLI::App& app) {
   auto c = std::make_unique<LidarCommands>();
-  CLI::App* lidar = app.add_subcommand("lidar", "a real Velodyne capture on its own: inspect it, convert it to point clouds");
+  CLI::App* lidar =
+      app.add_subcommand("lidar", "a real Velodyne capture on its own: inspect it, convert it to point clouds");
   lidar->require_subcommand(1);
   const std::string calibration_help =
       "laser calibration (ROS YAML or db.xml); default: the table shipped for the model the packets show "
@@ -219,22 +236,27 @@ std::unique_ptr<LidarCommands> addLidarCommands(CLI::App& app) {
   const std::string time_help =
       "[s] added to the packets' time since the top of the hour; auto: the hour of the position packets' GPS time, "
       "else of the capture clock";
-  c->inspect = lidar->add_subcommand("inspect", "what a capture holds: sensor model, packets, sweeps, points, spin rate, "
-                                                "return mode, time span and base, GPS fixes, every counter");
+  c->inspect = lidar->add_subcommand("inspect",
+                                     "what a capture holds: sensor model, packets, sweeps, points, spin rate, "
+                                     "return mode, time span and base, GPS fixes, every counter");
   c->inspect->add_option("FILE", c->file, "pcap capture")->required();
   c->inspect->add_option("--calibration", c->calibration, calibration_help);
   c->inspect->add_option("--lidar-time-base", c->time_base, time_help)->capture_default_str();
-  c->inspect->add_option("--json", c->json, "also write it all as JSON to this file; '-' prints the JSON instead of the text");
+  c->inspect->add_option("--json", c->json,
+                         "also write it all as JSON to this file; '-' prints the JSON instead of the text");
   c->inspect->add_flag("--force", c->force, "replace an existing --json file");
   c->inspect->add_flag("--strict", c->strict, "a cut-off capture is an error (exit 2), not a warning");
-  c->convert = lidar->add_subcommand("convert", "decode a capture into one PCD per sweep (x y z intensity ring azimuth "
-                                                "time), sweeps.csv, gps.csv and capture.json");
+  c->convert = lidar->add_subcommand("convert",
+                                     "decode a capture into one PCD per sweep (x y z intensity ring azimuth "
+                                     "time), sweeps.csv, gps.csv and capture.json");
   c->convert->add_option("--pcap", c->pcap, "pcap capture")->required();
-  c->convert->add_option("--out", c->out, "output directory (built beside it and moved into place when complete)")->required();
+  c->convert->add_option("--out", c->out, "output directory (built beside it and moved into place when complete)")
+      ->required();
   c->convert->add_option("--calibration", c->calibration, calibration_help);
   c->convert->add_option("--lidar-time-base", c->time_base, time_help)->capture_default_str();
   c->convert->add_flag("--kitti", c->kitti, "also write KITTI .bin scans (float32 x y z reflectance) in OUT/kitti/");
-  c->convert->add_flag("--force", c->force, "replace an existing, non-empty --out directory (whole, once the new one is complete)");
+  c->convert->add_flag("--force", c->force,
+                       "replace an existing, non-empty --out directory (whole, once the new one is complete)");
   c->convert->add_flag("--strict", c->strict, "a cut-off capture is an error (exit 2, nothing written), not a warning");
   return c;
 }

@@ -21,12 +21,12 @@ namespace terrain::app {
 struct LidarCommands {
   CLI::App* inspect = nullptr;
   CLI::App* convert = nullptr;
-  std::string file;              // inspect: the capture
-  std::string pcap;              // convert: the capture
-  std::string calibration;       // empty: the shipped table of the model found
+  std::string file;         // inspect: the capture
+  std::string pcap;         // convert: the capture
+  std::string calibration;  // empty: the shipped table of the model found
   std::string time_base = "auto";
-  std::string json;              // inspect --json FILE ("-": stdout instead of the text)
-  std::string out;               // convert --out
+  std::string json;  // inspect --json FILE ("-": stdout instead of the text)
+  std::string out;   // convert --out
   bool force = false, kitti = false, strict = false;
 };
 

@@ -14,14 +14,14 @@
 #include "app/pipeline_config_io.hpp"
 #include "app/progress.hpp"
 #include "app/run_state.hpp"
-#include "evaluation/regression.hpp"
 #include "core/pipeline.hpp"
 #include "evaluation/kitti.hpp"
 #include "evaluation/metrics.hpp"
+#include "evaluation/regression.hpp"
 #include "evaluation/report.hpp"
-#include "rig/kitti.hpp"
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
+#include "rig/kitti.hpp"
 #include "rig/pcap_file.hpp"
 #include "rig/velodyne_source.hpp"
 #include "scenes/scene_generator.hpp"
@@ -84,10 +84,12 @@ void addCameraRigOption(CLI::App& cmd, std::string& rig) {
 
 // options that fill the simulation settings; defaults shown in --help
 void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, const std::string& flag) {
-  cmd.add_option(flag, config_file, "YAML file with simulation settings (sections robot, lidar, camera, gps, gyro); "
-                                    "command-line options override it");
+  cmd.add_option(flag, config_file,
+                 "YAML file with simulation settings (sections robot, lidar, camera, gps, gyro); "
+                 "command-line options override it");
   cmd.add_option("--seed", c.seed, "noise seed (>= 0)")->capture_default_str()->check(kSeed);
-  cmd.add_option("--threads", c.threads, "lidar worker threads, 0 = all cores (output does not depend on it)")->capture_default_str();
+  cmd.add_option("--threads", c.threads, "lidar worker threads, 0 = all cores (output does not depend on it)")
+      ->capture_default_str();
   cmd.add_option("--speed", c.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
   cmd.add_option("--mast-height", c.robot.mast_height, "lidar height above the ground [m]")->capture_default_str();
   cmd.add_option("--lidar-calibration", c.lidar.calibration,
@@ -95,15 +97,19 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, std::string& config_file, c
   cmd.add_option("--rotation-hz", c.lidar.rotation_hz, "lidar spin rate [Hz], 5-15")->capture_default_str();
   cmd.add_option("--max-range", c.lidar.max_range, "lidar maximum range [m]")->capture_default_str();
   cmd.add_option("--range-noise", c.lidar.range_noise, "1-sigma range noise [m]")->capture_default_str();
-  cmd.add_option("--laser-bias", c.lidar.laser_bias, "1-sigma of a fixed per-laser range bias [m]")->capture_default_str();
+  cmd.add_option("--laser-bias", c.lidar.laser_bias, "1-sigma of a fixed per-laser range bias [m]")
+      ->capture_default_str();
   cmd.add_option("--dropout", c.lidar.dropout, "probability a return is lost")->capture_default_str();
-  cmd.add_option("--height-cap", c.lidar.height_cap, "returns higher than this above the sensor are dropped [m]")->capture_default_str();
+  cmd.add_option("--height-cap", c.lidar.height_cap, "returns higher than this above the sensor are dropped [m]")
+      ->capture_default_str();
   cmd.add_flag("!--no-camera", c.camera.enabled, "do not render camera frames");
   addCameraRigOption(cmd, c.camera.rig);
   cmd.add_option("--width", c.camera.width, "image width [px] of every camera (default: each camera's own, 640)");
   cmd.add_option("--height", c.camera.height, "image height [px] of every camera (default: each camera's own, 480)");
-  cmd.add_option("--fovy", c.camera.fovy_deg, "vertical field of view [deg] of every camera (default: each camera's own, 75)");
-  cmd.add_option("--camera-pitch", c.camera.pitch_deg, "upward tilt [deg] of every camera (default: each camera's own, 8)");
+  cmd.add_option("--fovy", c.camera.fovy_deg,
+                 "vertical field of view [deg] of every camera (default: each camera's own, 75)");
+  cmd.add_option("--camera-pitch", c.camera.pitch_deg,
+                 "upward tilt [deg] of every camera (default: each camera's own, 8)");
   cmd.add_option("--gps-sigma", c.gps.horizontal_sigma, "GPS horizontal 1-sigma noise [m]")->capture_default_str();
   cmd.add_option("--gyro-noise", c.gyro.noise_sigma, "gyro 1-sigma noise [rad/s]")->capture_default_str();
   cmd.add_option("--gyro-bias", c.gyro.bias_sigma, "1-sigma of the constant gyro bias [rad/s]")->capture_default_str();
@@ -120,10 +126,12 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
                              : "YAML file with pipeline settings (sections pose, voxel_map, ground, boundary, "
                                "estimation, footprint, crown, hull, free_space); command-line options override it");
   cmd.add_option("--voxel-size", c.voxel_map.voxel_size, "voxel edge [m]")->capture_default_str();
-  cmd.add_option("--histogram", histogram, "ground height histogram: local (tiles following the terrain) or global (the paper's)")
+  cmd.add_option("--histogram", histogram,
+                 "ground height histogram: local (tiles following the terrain) or global (the paper's)")
       ->capture_default_str();
   cmd.add_option("--solver", solver, "GMRF solver: icm or mincut (exact)")->capture_default_str();
-  cmd.add_option("--delta", c.ground.delta, "half-width of the ground band around the histogram peak [m]")->capture_default_str();
+  cmd.add_option("--delta", c.ground.delta, "half-width of the ground band around the histogram peak [m]")
+      ->capture_default_str();
   cmd.add_option("--alpha", c.ground.alpha, "GMRF single-site weight")->capture_default_str();
   cmd.add_option("--beta", c.ground.beta, "GMRF pair-site Potts weight")->capture_default_str();
   cmd.add_option("--gamma", c.ground.gamma, "GMRF pair-site height-contrast weight")->capture_default_str();
@@ -135,15 +143,18 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
     return;
   }
   cmd.add_option("--segment-every", c.segment_every, "run ground segmentation every N frames")->capture_default_str();
-  cmd.add_option("--boundary-threshold", c.boundary.threshold, "boundary gradient threshold (grey levels)")->capture_default_str();
+  cmd.add_option("--boundary-threshold", c.boundary.threshold, "boundary gradient threshold (grey levels)")
+      ->capture_default_str();
   cmd.add_option("--kx", c.boundary.kx, "weight of horizontal change in the gradient")->capture_default_str();
   cmd.add_option("--ky", c.boundary.ky, "weight of vertical change in the gradient")->capture_default_str();
-  cmd.add_flag("--erode-all-directions,!--erode-horizontal", c.boundary.erode_all_directions,
-               "erosion keeps thin boundaries of every direction, or near-horizontal ones only (default: near-horizontal)");
+  cmd.add_flag(
+      "--erode-all-directions,!--erode-horizontal", c.boundary.erode_all_directions,
+      "erosion keeps thin boundaries of every direction, or near-horizontal ones only (default: near-horizontal)");
   cmd.add_flag("--erode-sloping,!--no-erode-sloping", c.boundary.erode_sloping,
                "the near-horizontal erosion also keeps boundaries sloping up to 1 row per column, away from foliage "
                "(roof lines seen obliquely) (default: on)");
-  cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")->capture_default_str();
+  cmd.add_option("--max-distance", c.estimation.max_distance, "vertices farther than this are not raised [m]")
+      ->capture_default_str();
   cmd.add_flag("--clear-line,!--no-clear-line", c.estimation.clear_line,
                "skip a frame's estimate when another sensed object stands in the vertex's image column (default: on)");
   cmd.add_flag("--sky-test,!--no-sky-test", c.estimation.require_sky_above,
@@ -163,8 +174,9 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
   cmd.add_flag("--sky-ceiling,!--no-sky-ceiling", c.free_space.enabled,
                "lower every recovered height to the lowest ray of a sky pixel over its cell: nothing stands higher "
                "where the cameras saw sky (default: off)");
-  cmd.add_option("--spread-distance", c.estimation.spread_distance,
-                 "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
+  cmd.add_option(
+         "--spread-distance", c.estimation.spread_distance,
+         "[m] object vertices without an estimate take the nearest estimated one's height up to this far away (0: off)")
       ->capture_default_str();
   cmd.add_option(
       "--set", settings,
@@ -176,8 +188,10 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, std::string& config_fi
 void applyChoices(PipelineConfig& c, const std::string& histogram, const std::string& solver,
                   const std::vector<std::string>& settings) {
   for (const std::string& s : settings) app::applyPipelineSetting(s, c, "--set");
-  if (!parseHistogram(histogram, c.ground.histogram)) throw io::InputError("--histogram must be local or global, not '" + histogram + "'");
-  if (!parseSolver(solver, c.ground.solver)) throw io::InputError("--solver must be icm or mincut, not '" + solver + "'");
+  if (!parseHistogram(histogram, c.ground.histogram))
+    throw io::InputError("--histogram must be local or global, not '" + histogram + "'");
+  if (!parseSolver(solver, c.ground.solver))
+    throw io::InputError("--solver must be icm or mincut, not '" + solver + "'");
   app::validate(c);
 }
 
@@ -200,56 +214,65 @@ void printScorecard(const nlohmann::json& r) {
   for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
     if (!r["ground_segmentation"].contains(m)) continue;  // baselines not asked for
     const auto& g = r["ground_segmentation"][m];
-    std::cout << "    " << std::left << std::setw(28) << m << std::right << g["f1"].get<double>() << "  " << g["iou"].get<double>()
-              << "  " << g["precision"].get<double>() << "      " << g["recall"].get<double>() << "\n";
+    std::cout << "    " << std::left << std::setw(28) << m << std::right << g["f1"].get<double>() << "  "
+              << g["iou"].get<double>() << "  " << g["precision"].get<double>() << "      " << g["recall"].get<double>()
+              << "\n";
   }
-  for (const auto& w : r.value("truth_warnings", nlohmann::json::array())) std::cerr << "terrain: warning: " << w.get<std::string>() << "\n";
+  for (const auto& w : r.value("truth_warnings", nlohmann::json::array()))
+    std::cerr << "terrain: warning: " << w.get<std::string>() << "\n";
   const auto& h = r["height_recovery"];
   if (h["after"]["cells"].get<std::size_t>() == 0) {
     std::cout << "  object heights: no object cells, not scored\n";
   } else {
-    std::cout << "  object heights (" << h["after"]["cells"].get<std::size_t>() << " cells)   MAE m   RMSE m  bias m   variance m2\n";
+    std::cout << "  object heights (" << h["after"]["cells"].get<std::size_t>()
+              << " cells)   MAE m   RMSE m  bias m   variance m2\n";
     for (const char* k : {"before", "after"}) {
-      std::cout << "    " << std::left << std::setw(28) << (std::string(k) == "before" ? "sensed only" : "boundary estimation")
-                << std::right << h[k]["mae_m"].get<double>() << "  " << h[k]["rmse_m"].get<double>() << "  "
+      std::cout << "    " << std::left << std::setw(28)
+                << (std::string(k) == "before" ? "sensed only" : "boundary estimation") << std::right
+                << h[k]["mae_m"].get<double>() << "  " << h[k]["rmse_m"].get<double>() << "  "
                 << h[k]["bias_m"].get<double>() << "  " << h[k]["variance_m2"].get<double>() << "\n";
     }
-    std::cout << "    cells that got an estimate: " << h["estimated_cells"]["after"]["cells"].get<std::size_t>() << ", MAE "
-              << h["estimated_cells"]["before"]["mae_m"].get<double>() << " -> "
+    std::cout << "    cells that got an estimate: " << h["estimated_cells"]["after"]["cells"].get<std::size_t>()
+              << ", MAE " << h["estimated_cells"]["before"]["mae_m"].get<double>() << " -> "
               << h["estimated_cells"]["after"]["mae_m"].get<double>()
               << " m; terrain cells wrongly raised: " << h["raised_terrain_cells"].get<std::size_t>() << "\n";
   }
   if (h.contains("by_kind")) {
     std::cout << "    by kind:";
     for (const auto& [kind, e] : h["by_kind"].items()) {
-      std::cout << " " << kind << " " << e["before"]["mae_m"].get<double>() << " -> " << e["after"]["mae_m"].get<double>() << " m ("
-                << e["after"]["cells"].get<std::size_t>() << " cells);";
+      std::cout << " " << kind << " " << e["before"]["mae_m"].get<double>() << " -> "
+                << e["after"]["mae_m"].get<double>() << " m (" << e["after"]["cells"].get<std::size_t>() << " cells);";
     }
-    std::cout << " sensed as terrain (under crowns): " << h["object_cells_sensed_as_terrain"].get<std::size_t>() << " cells\n";
+    std::cout << " sensed as terrain (under crowns): " << h["object_cells_sensed_as_terrain"].get<std::size_t>()
+              << " cells\n";
   }
   if (h.contains("by_camera_view")) {
     std::cout << "    cells whose sensed top the camera saw:";
     for (const char* k : {"building_in_camera_view", "tree_in_camera_view"}) {
       if (!h["by_camera_view"].contains(k)) continue;
       const auto& e = h["by_camera_view"][k];
-      std::cout << " " << std::string(k).substr(0, std::string(k).find('_')) << " " << e["before"]["mae_m"].get<double>() << " -> "
-                << e["after"]["mae_m"].get<double>() << " m (" << e["raised_cells"].get<std::size_t>() << " of "
-                << e["after"]["cells"].get<std::size_t>() << " raised);";
+      std::cout << " " << std::string(k).substr(0, std::string(k).find('_')) << " "
+                << e["before"]["mae_m"].get<double>() << " -> " << e["after"]["mae_m"].get<double>() << " m ("
+                << e["raised_cells"].get<std::size_t>() << " of " << e["after"]["cells"].get<std::size_t>()
+                << " raised);";
     }
     if (h["by_camera_view"].contains("never_in_camera_view")) {
-      std::cout << " never in view: " << h["by_camera_view"]["never_in_camera_view"]["after"]["cells"].get<std::size_t>() << " cells";
+      std::cout << " never in view: "
+                << h["by_camera_view"]["never_in_camera_view"]["after"]["cells"].get<std::size_t>() << " cells";
     }
-    std::cout << "\n    object edge cells raised (a wall or crown within 0.5 m): " << h.value("raised_edge_cells", 0) << "\n";
+    std::cout << "\n    object edge cells raised (a wall or crown within 0.5 m): " << h.value("raised_edge_cells", 0)
+              << "\n";
   }
   if (h.contains("footprints")) {
     const auto& f = h["footprints"];
     std::cout << "    building footprints completed: " << f["completed"].get<std::size_t>() << ", roof cells "
-              << f["roof_cells"].get<std::size_t>() << " (" << f["object_cells"].get<std::size_t>() << " over objects, MAE "
-              << f["on_objects"]["mae_m"].get<double>() << " m; " << f["wrongly_filled_cells"].get<std::size_t>()
-              << " over terrain)\n";
+              << f["roof_cells"].get<std::size_t>() << " (" << f["object_cells"].get<std::size_t>()
+              << " over objects, MAE " << f["on_objects"]["mae_m"].get<double>() << " m; "
+              << f["wrongly_filled_cells"].get<std::size_t>() << " over terrain)\n";
   }
   if (h.contains("crown_ground_vertices")) {
-    std::cout << "    ground vertices raised under tree crowns: " << h["crown_ground_vertices"].get<std::size_t>() << "\n";
+    std::cout << "    ground vertices raised under tree crowns: " << h["crown_ground_vertices"].get<std::size_t>()
+              << "\n";
   }
   if (h.contains("crown_hull")) {
     const auto& ch = h["crown_hull"];
@@ -259,15 +282,17 @@ void printScorecard(const nlohmann::json& r) {
   }
   if (h.contains("sky_ceiling")) {
     std::cout << "    raised vertices lowered to the sky's ceiling: " << h["sky_ceiling"]["lowered_vertices"].get<int>()
-              << " (of " << h["sky_ceiling"]["vertices_with_ceiling"].get<std::size_t>() << " vertices with a ceiling)\n";
+              << " (of " << h["sky_ceiling"]["vertices_with_ceiling"].get<std::size_t>()
+              << " vertices with a ceiling)\n";
   }
   if (h.contains("object_tops")) {
     std::cout << "    object tops the camera saw, at their real height (10 %, at least 1 m) sensed -> recovered:";
     for (const char* k : {"building", "tree"}) {
       const auto& t = h["object_tops"][k];
-      std::cout << " " << k << "s " << t["at_height_before"].get<std::size_t>() << " -> " << t["at_height_after"].get<std::size_t>()
-                << " of " << t["top_seen"].get<std::size_t>() << " (too high " << t["too_high_before"].get<std::size_t>()
-                << " -> " << t["too_high_after"].get<std::size_t>() << "; top MAE " << t["before"]["mae_m"].get<double>()
+      std::cout << " " << k << "s " << t["at_height_before"].get<std::size_t>() << " -> "
+                << t["at_height_after"].get<std::size_t>() << " of " << t["top_seen"].get<std::size_t>()
+                << " (too high " << t["too_high_before"].get<std::size_t>() << " -> "
+                << t["too_high_after"].get<std::size_t>() << "; top MAE " << t["before"]["mae_m"].get<double>()
                 << " -> " << t["after"]["mae_m"].get<double>() << " m);";
     }
     std::cout << "\n    of those, seen in a frame with their lower part (where the lidar reaches):";
@@ -310,7 +335,8 @@ nlohmann::json evaluate(const Pipeline& pipeline, const eval::RunTruth& truth, c
   if (world) {
     report = eval::evaluateRun(pipeline, truth, *world, scoring);
     if (!quiet) printScorecard(report);
-    io::writeFileAtomic(out / "report.html", app::htmlReport(report, pipeline, truth, *world, "terrain reconstruction report"), true);
+    io::writeFileAtomic(out / "report.html",
+                        app::htmlReport(report, pipeline, truth, *world, "terrain reconstruction report"), true);
   } else {
     report["frames"] = pipeline.records().size();
     report["voxels"] = pipeline.map().size();
@@ -395,21 +421,24 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   const auto& s = pipeline.segmentation();
   std::size_t ground = 0;
   for (auto g : s.refined) ground += g;
-  if (!quiet) std::cout << std::fixed << std::setprecision(1) << "frames " << pipeline.records().size() << ", voxels "
-            << pipeline.map().size() << " (" << ground << " ground), mesh vertices " << pipeline.mesh().vertices().size()
-            << " (" << recovered << " raised by boundary estimation)\n"
-            << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
-            << "per frame: median " << eval::percentiles(total).median << " ms in all, " << eval::percentiles(seg).median
-            << " ms ground segmentation\n";
+  if (!quiet)
+    std::cout << std::fixed << std::setprecision(1) << "frames " << pipeline.records().size() << ", voxels "
+              << pipeline.map().size() << " (" << ground << " ground), mesh vertices "
+              << pipeline.mesh().vertices().size() << " (" << recovered << " raised by boundary estimation)\n"
+              << "GMRF energy " << s.energy_rough << " (rough) -> " << s.energy_refined << " (refined)\n"
+              << "per frame: median " << eval::percentiles(total).median << " ms in all, "
+              << eval::percentiles(seg).median << " ms ground segmentation\n";
   // memory growth between the first tenth of the run and its end, against the voxels added
   if (!quiet && pipeline.records().size() >= 10 && pipeline.records().back().resident_bytes > 0) {
     const auto& recs = pipeline.records();
     const auto& a = recs[recs.size() / 10];
     const auto& b = recs.back();
-    std::cout << "memory: " << a.resident_bytes / 1e6 << " MB resident after frame " << a.frame << ", " << b.resident_bytes / 1e6
-              << " MB after frame " << b.frame;
+    std::cout << "memory: " << a.resident_bytes / 1e6 << " MB resident after frame " << a.frame << ", "
+              << b.resident_bytes / 1e6 << " MB after frame " << b.frame;
     if (b.voxels > a.voxels && b.resident_bytes > a.resident_bytes) {
-      std::cout << "; " << (static_cast<double>(b.resident_bytes) - static_cast<double>(a.resident_bytes)) / (b.voxels - a.voxels)
+      std::cout << "; "
+                << (static_cast<double>(b.resident_bytes) - static_cast<double>(a.resident_bytes)) /
+                       (b.voxels - a.voxels)
                 << " bytes per voxel added in between (" << b.voxels - a.voxels << " voxels)";
     }
     std::cout << "\n";
@@ -421,8 +450,9 @@ nlohmann::json reconstruct(rig::SensorSource& source, const PipelineConfig& conf
   const bool scored = world && truth.voxels.size() > 0;
   if (scored) app::writeRunState(out, pipeline, truth, world->scenePath());
   nlohmann::json report = evaluate(pipeline, truth, scored ? world : nullptr, out, quiet, scoring);
-  if (!quiet) std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json"
-                        << (scored ? ", report.html, state/" : "") << "\n";
+  if (!quiet)
+    std::cout << "wrote mesh.ply, mesh.obj, voxels.pcd, height_before.png, height_after.png, boundaries/, report.json"
+              << (scored ? ", report.html, state/" : "") << "\n";
   return report;
 }
 
@@ -442,7 +472,7 @@ struct LidarChoice {
   std::string endpoint;  // pcap:FILE or udp:HOST:PORT; empty: no replacement
   fs::path calibration;  // empty: the other source's laser table, or the one shipped for the capture's model
   std::string time_base = "auto";
-  bool strict = false;   // a cut-off capture is an error
+  bool strict = false;       // a cut-off capture is an error
   double mast_height = 1.8;  // [m] a capture reconstructed alone: lidar above the ground
   rig::VelodyneOptions options;
 };
@@ -456,8 +486,10 @@ void addLidarToOutputs(const fs::path& out, nlohmann::json& report, const rig::V
   std::vector<std::string> warnings = notes;
   if (!cut_off.empty()) warnings.push_back("lidar capture cut off (" + cut_off + "); everything before was decoded");
   const auto& d = lidar.stats();
-  if (d.lost > 0) warnings.push_back("lidar: " + std::to_string(d.lost) + " data packets lost (gaps in the timestamps)");
-  if (d.rejected() > 0) warnings.push_back("lidar: " + std::to_string(d.rejected()) + " data packets rejected: " + d.summary());
+  if (d.lost > 0)
+    warnings.push_back("lidar: " + std::to_string(d.lost) + " data packets lost (gaps in the timestamps)");
+  if (d.rejected() > 0)
+    warnings.push_back("lidar: " + std::to_string(d.rejected()) + " data packets rejected: " + d.summary());
   j["source"] = lidar.summary();
   report["lidar"] = j;
   nlohmann::json w = nlohmann::json::parse(io::readFile(out / "warnings.json"));
@@ -513,7 +545,8 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
                                   bool force, const eval::EvaluationOptions& scoring) {
   const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
   if (endpoint.kind != rig::LidarEndpoint::Kind::Pcap) {
-    throw io::InputError("--lidar " + lidar_choice.endpoint + " without --input: a live sensor needs the other sensors "
+    throw io::InputError("--lidar " + lidar_choice.endpoint +
+                         " without --input: a live sensor needs the other sensors "
                          "from a dataset (--input); a capture (pcap:FILE) can be reconstructed alone");
   }
   if (!(lidar_choice.mast_height > 0 && lidar_choice.mast_height < 10)) {
@@ -528,13 +561,16 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
   if (lidar_choice.strict) app::refuseCutOff(endpoint.path, setup.cut_off);
   refuseInputInside(out, endpoint.path, "--lidar");
   io::StagedDirectory staged(out, force);
-  std::cout << "reconstruct: " << endpoint.path << ", an " << rig::velodyne::modelName(setup.model) << " capture, calibration "
-            << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0) << setup.time_base << " s from the "
-            << setup.time_base_source << "; no camera, no gyro; unscored (a real capture has no ground truth)\n";
+  std::cout << "reconstruct: " << endpoint.path << ", an " << rig::velodyne::modelName(setup.model)
+            << " capture, calibration " << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0)
+            << setup.time_base << " s from the " << setup.time_base_source
+            << "; no camera, no gyro; unscored (a real capture has no ground truth)\n";
   nlohmann::json report = reconstruct(source, pipe_cfg, staged.path(), nullptr, scoring);
-  std::vector<std::string> notes = {"unscored: a real capture has no ground truth; no camera images and no gyro, so nothing "
-                                    "above the lidar's reach is recovered and the heading comes from the GPS track alone"};
-  if (!setup.first_fix) notes.push_back("the capture has no GPS fix: the rig is taken to stand where it started, heading east");
+  std::vector<std::string> notes = {
+      "unscored: a real capture has no ground truth; no camera images and no gyro, so nothing "
+      "above the lidar's reach is recovered and the heading comes from the GPS track alone"};
+  if (!setup.first_fix)
+    notes.push_back("the capture has no GPS fix: the rig is taken to stand where it started, heading east");
   report["scored"] = false;
   report["time_base_s"] = setup.time_base;
   report["time_base_source"] = setup.time_base_source;
@@ -621,10 +657,12 @@ int importScene(const fs::path& world, const fs::path& out, const fs::path& clas
     if (xy.size() != 2) throw io::InputError("--path '" + path + "': '" + point + "' is not x,y");
     options.path.emplace_back(xy[0], xy[1]);
   }
-  if (!path.empty() && options.path.size() < 2) throw io::InputError("--path '" + path + "': needs at least 2 waypoints");
+  if (!path.empty() && options.path.size() < 2)
+    throw io::InputError("--path '" + path + "': needs at least 2 waypoints");
   const auto o = numbersIn(origin, ',', "--origin");
   if (o.size() != 3 || std::abs(o[0]) > 90 || std::abs(o[1]) > 180)
-    throw io::InputError("--origin '" + origin + "': expected latitude,longitude,altitude within [-90, 90] and [-180, 180] deg");
+    throw io::InputError("--origin '" + origin +
+                         "': expected latitude,longitude,altitude within [-90, 90] and [-180, 180] deg");
   options.origin = {o[0], o[1], o[2]};
   const fs::path sidecar = scenes::truthPathFor(out);
   for (const fs::path& f : {out, sidecar}) {
@@ -638,14 +676,16 @@ int importScene(const fs::path& world, const fs::path& out, const fs::path& clas
   io::writeFileAtomic(sidecar, scenes::truthToJson(scene.truth), true);
   std::map<std::string, int> by_class;
   for (const auto& ob : scene.truth.objects) ++by_class[scenes::className(ob.object_class)];
-  std::cout << "wrote " << out.string() << " and " << sidecar.string() << ": " << scene.truth.objects.size() << " objects (";
+  std::cout << "wrote " << out.string() << " and " << sidecar.string() << ": " << scene.truth.objects.size()
+            << " objects (";
   const char* sep = "";
   for (const auto& [cls, n] : by_class) std::cout << sep << n << " " << cls, sep = ", ";
   std::cout << "), terrain '" << scene.truth.terrain.geom << "' (" << scene.truth.terrain.kind << "), path of "
             << scene.truth.path.size() << " waypoints with " << scene.path_clearance << " m to the nearest object\n";
   for (const auto& a : scene.added) std::cout << "  added " << a << "\n";
   if (!scene.unclassified.empty()) {
-    std::cout << "  " << scene.unclassified.size() << " geom(s) no pattern classed (scored as neither ground nor object; "
+    std::cout << "  " << scene.unclassified.size()
+              << " geom(s) no pattern classed (scored as neither ground nor object; "
               << "give --classes patterns that match them):";
     for (const auto& u : scene.unclassified) std::cout << " " << u;
     std::cout << "\n";
@@ -669,7 +709,8 @@ int generateScene(const scenes::SceneConfig& cfg, const fs::path& out, bool forc
 // every camera's images at 3 bytes a pixel (RGB, depth and segmentation PNGs: about 4.5 measured)
 std::uintmax_t recordingFrameBytes(const sim::SimulatedRig& rig) {
   std::uintmax_t bytes = static_cast<std::uintmax_t>(rig.firingsPerTurn()) * rig.lasers().laserCount() * 24;
-  for (const auto& c : rig.calibration().cameras) bytes += static_cast<std::uintmax_t>(c.intrinsics.width) * c.intrinsics.height * 3;
+  for (const auto& c : rig.calibration().cameras)
+    bytes += static_cast<std::uintmax_t>(c.intrinsics.width) * c.intrinsics.height * 3;
   return bytes;
 }
 
@@ -684,8 +725,8 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   producer["scene_seed"] = world->truth().seed;
   producer["simulation"] = nlohmann::json::parse(sim::simConfigToJson(config));
   io::requireSpace(out, recordingFrameBytes(rig) * static_cast<std::uintmax_t>(frames),
-                   "recording " + std::to_string(frames) + " frames (" + std::to_string(recordingFrameBytes(rig) / 1000000) +
-                       " MB a frame at least)");
+                   "recording " + std::to_string(frames) + " frames (" +
+                       std::to_string(recordingFrameBytes(rig) / 1000000) + " MB a frame at least)");
   io::StagedDirectory staged(out, force);
   rig::DatasetWriter writer(staged.path(), rig.calibration(), rig.lasers(), producer.dump(), true);
   // the same sweeps as HDL-64E packets in a capture, as the real sensor would have sent them
@@ -756,8 +797,8 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
     }
     capture->close();
     const auto& st = encoder->stats();
-    std::cout << "wrote lidar.pcap: " << st.packets << " HDL-64E packets, " << st.points << " returns, " << position_packets
-              << " position packets";
+    std::cout << "wrote lidar.pcap: " << st.packets << " HDL-64E packets, " << st.points << " returns, "
+              << position_packets << " position packets";
     if (st.too_close + st.too_far + st.off_schedule > 0) {
       std::cout << " (" << st.too_close + st.too_far + st.off_schedule << " returns not encodable)";
     }
@@ -790,7 +831,8 @@ long long sendPaced(rig::UdpSender& out, const std::vector<rig::velodyne::TimedP
 int stream(const fs::path& pcap_path, const fs::path& scene_path, int frames, const sim::SimConfig& config,
            const std::string& to, double speed) {
   const rig::LidarEndpoint target = rig::LidarEndpoint::parse("udp:" + to, "stream destination");
-  if (!(speed > 0 && speed <= 100)) throw io::InputError("--speed " + std::to_string(speed) + " is out of range (allowed: (0, 100])");
+  if (!(speed > 0 && speed <= 100))
+    throw io::InputError("--speed " + std::to_string(speed) + " is out of range (allowed: (0, 100])");
   rig::UdpSender out(target.host, target.port);
   long long sent = 0, late = 0;
   const auto t0 = std::chrono::steady_clock::now();
@@ -854,19 +896,23 @@ int stream(const fs::path& pcap_path, const fs::path& scene_path, int frames, co
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"terrain: testbed for robot terrain reconstruction (Song et al. 2012) on simulated and real sensor rigs"};
+  CLI::App app{
+      "terrain: testbed for robot terrain reconstruction (Song et al. 2012) on simulated and real sensor rigs"};
   app.require_subcommand(1);
 
   // terrain scenes generate
   CLI::App* scenes_cmd = app.add_subcommand("scenes", "generated MuJoCo scenes with ground truth");
   scenes_cmd->require_subcommand(1);
-  CLI::App* gen = scenes_cmd->add_subcommand("generate", "write FILE.xml, FILE.truth.json (and FILE.hfield) for a terrain type and seed");
+  CLI::App* gen = scenes_cmd->add_subcommand(
+      "generate", "write FILE.xml, FILE.truth.json (and FILE.hfield) for a terrain type and seed");
   scenes::SceneConfig scene_cfg;
   fs::path scene_out;
   bool scene_force = false;
   std::string types;
   for (const auto& t : scenes::sceneTypes()) types += (types.empty() ? "" : ", ") + t;
-  gen->add_option("--type", scene_cfg.type, "terrain type: " + types)->capture_default_str()->check(CLI::IsMember(scenes::sceneTypes()));
+  gen->add_option("--type", scene_cfg.type, "terrain type: " + types)
+      ->capture_default_str()
+      ->check(CLI::IsMember(scenes::sceneTypes()));
   gen->add_option("--seed", scene_cfg.seed, "random seed (>= 0); the same type and seed give byte-identical files")
       ->capture_default_str()
       ->check(kSeed);
@@ -877,25 +923,31 @@ int main(int argc, char** argv) {
 
   // terrain scenes import
   CLI::App* imp = scenes_cmd->add_subcommand(
-      "import", "make a MuJoCo world of your own a testbed scene: SCENE.xml (the world, plus a skybox, a light and the "
-                "robot with its camera where it has none) and SCENE.truth.json (objects classed from geom names)");
+      "import",
+      "make a MuJoCo world of your own a testbed scene: SCENE.xml (the world, plus a skybox, a light and the "
+      "robot with its camera where it has none) and SCENE.truth.json (objects classed from geom names)");
   fs::path imp_world, imp_out, imp_classes;
   std::string imp_path, imp_origin = "0,0,0";
   bool imp_force = false;
   imp->add_option("--mjcf", imp_world, "the world (MJCF)")->required()->check(CLI::ExistingFile);
-  imp->add_option("--out", imp_out, "the scene to write (MJCF; its sidecar beside it); in the world's folder when the world "
-                                     "names files (heightfields, meshes, textures)")->required();
-  imp->add_option("--classes", imp_classes,
-                  "YAML map of class (building, crown, trunk, terrain) to name patterns (case-insensitive substrings of "
-                  "a geom's, its material's or its body's name), each replacing that class's defaults: building: build, "
-                  "bldg, house, hall, tower, shed, garage, facade, roof; crown: crown, leaf, leaves, foliage, canopy, "
-                  "bush, tree; trunk: trunk, bark, stem (checked first: tree_trunk is a trunk); terrain: ground, terrain, floor, "
-                  "heightfield, hfield")
+  imp->add_option("--out", imp_out,
+                  "the scene to write (MJCF; its sidecar beside it); in the world's folder when the world "
+                  "names files (heightfields, meshes, textures)")
+      ->required();
+  imp->add_option(
+         "--classes", imp_classes,
+         "YAML map of class (building, crown, trunk, terrain) to name patterns (case-insensitive substrings of "
+         "a geom's, its material's or its body's name), each replacing that class's defaults: building: build, "
+         "bldg, house, hall, tower, shed, garage, facade, roof; crown: crown, leaf, leaves, foliage, canopy, "
+         "bush, tree; trunk: trunk, bark, stem (checked first: tree_trunk is a trunk); terrain: ground, terrain, "
+         "floor, "
+         "heightfield, hfield")
       ->check(CLI::ExistingFile);
-  imp->add_option("--path", imp_path,
-                  "the robot's path as waypoints \"x,y;x,y;...\" [m, world]; default: the straight line along x, 90 % of "
-                  "the terrain long, nearest the terrain's middle with 3.35 m of room to every object (else the one "
-                  "with the most room, at least 1.35 m: the robot's half width and a metre)");
+  imp->add_option(
+      "--path", imp_path,
+      "the robot's path as waypoints \"x,y;x,y;...\" [m, world]; default: the straight line along x, 90 % of "
+      "the terrain long, nearest the terrain's middle with 3.35 m of room to every object (else the one "
+      "with the most room, at least 1.35 m: the robot's half width and a metre)");
   imp->add_option("--origin", imp_origin, "the world origin on the globe: latitude,longitude [deg],altitude [m]")
       ->capture_default_str();
   imp->add_flag("--force", imp_force, "overwrite an existing scene and sidecar");
@@ -920,11 +972,13 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
   rec->add_option("--out", rec_out, "output dataset directory")->required();
-  rec->add_flag("--force", rec_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
+  rec->add_flag("--force", rec_force,
+                "replace an existing, non-empty output directory (whole, once the new one is complete)");
   bool rec_pcap = false;
-  rec->add_flag("--pcap", rec_pcap,
-                "also write the lidar as HDL-64E packets in OUT/lidar.pcap (Wireshark, VeloView, PCL open it), with the "
-                "GPS as position packets (port 8308: $GPGGA for every fix, $GPRMC once a second)");
+  rec->add_flag(
+      "--pcap", rec_pcap,
+      "also write the lidar as HDL-64E packets in OUT/lidar.pcap (Wireshark, VeloView, PCL open it), with the "
+      "GPS as position packets (port 8308: $GPGGA for every fix, $GPRMC once a second)");
   try {
     if (!config_file.empty()) sim::loadSimConfig(config_file, sim_cfg);
   } catch (const io::InputError& e) {
@@ -941,31 +995,40 @@ int main(int argc, char** argv) {
   std::vector<std::string> pipe_settings;  // --set KEY=VALUE, applied after --config
   fs::path recon_input, recon_out;
   bool recon_force = false;
-  recon->add_option("--input", recon_input,
-                    "dataset directory (from 'terrain record'); without it, --lidar pcap:FILE reconstructs a real capture "
-                    "alone (lidar and GPS from its packets, unscored)");
+  recon->add_option(
+      "--input", recon_input,
+      "dataset directory (from 'terrain record'); without it, --lidar pcap:FILE reconstructs a real capture "
+      "alone (lidar and GPS from its packets, unscored)");
   recon->add_option("--out", recon_out, "output directory")->required();
-  recon->add_flag("--force", recon_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
+  recon->add_flag("--force", recon_force,
+                  "replace an existing, non-empty output directory (whole, once the new one is complete)");
   LidarChoice lidar_choice;
   auto addLidarOptions = [&lidar_choice](CLI::App& cmd, const std::string& others) {
     cmd.add_option("--lidar", lidar_choice.endpoint,
                    "take the lidar from a Velodyne: pcap:FILE (a capture) or udp:HOST:PORT (live packets, e.g. "
-                   "udp:0.0.0.0:2368); camera, GPS and gyro still come from " + others + ", matched by time");
+                   "udp:0.0.0.0:2368); camera, GPS and gyro still come from " +
+                       others + ", matched by time");
     cmd.add_option("--calibration", lidar_choice.calibration,
                    "laser calibration for --lidar (ROS YAML or db.xml); default: the laser table of " + others);
     cmd.add_option("--lidar-time-base", lidar_choice.time_base,
                    "[s] added to the packets' time since the top of the hour; auto: 0 beside " + others +
-                       " (its clock), and for a capture reconstructed alone the hour of its GPS time, else of the capture clock")
+                       " (its clock), and for a capture reconstructed alone the hour of its GPS time, else of the "
+                       "capture clock")
         ->capture_default_str();
     cmd.add_option("--lidar-idle-timeout", lidar_choice.options.idle_timeout,
-                   "[s] a live lidar stream ends after this long without packets")->capture_default_str();
+                   "[s] a live lidar stream ends after this long without packets")
+        ->capture_default_str();
     cmd.add_option("--lidar-first-packet-timeout", lidar_choice.options.first_timeout,
-                   "[s] a live lidar stream without a single packet this long is an error (exit 2)")->capture_default_str();
-    cmd.add_flag("--strict", lidar_choice.strict, "a cut-off lidar capture is an error (exit 2, nothing written), not a warning");
+                   "[s] a live lidar stream without a single packet this long is an error (exit 2)")
+        ->capture_default_str();
+    cmd.add_flag("--strict", lidar_choice.strict,
+                 "a cut-off lidar capture is an error (exit 2, nothing written), not a warning");
   };
   addLidarOptions(*recon, "the dataset");
-  recon->add_option("--mast-height", lidar_choice.mast_height,
-                    "[m] lidar height above the ground, for a capture reconstructed alone")->capture_default_str();
+  recon
+      ->add_option("--mast-height", lidar_choice.mast_height,
+                   "[m] lidar height above the ground, for a capture reconstructed alone")
+      ->capture_default_str();
   eval::EvaluationOptions scoring;
   const auto addScoringOptions = [&scoring](CLI::App& cmd) {
     cmd.add_flag("--baselines,!--no-baselines", scoring.ground_baselines,
@@ -976,14 +1039,18 @@ int main(int argc, char** argv) {
   addScoringOptions(*recon);
 
   // terrain evaluate
-  CLI::App* evalc = app.add_subcommand("evaluate", "score a finished run (of 'terrain run' or 'terrain reconstruct') again: report.json and report.html");
+  CLI::App* evalc = app.add_subcommand(
+      "evaluate",
+      "score a finished run (of 'terrain run' or 'terrain reconstruct') again: report.json and report.html");
   fs::path eval_run, eval_out;
   evalc->add_option("--run", eval_run, "the run's output directory (it holds state/)")->required();
-  evalc->add_option("--out", eval_out, "where to write report.json and report.html (default: the run directory, replacing its reports)");
+  evalc->add_option("--out", eval_out,
+                    "where to write report.json and report.html (default: the run directory, replacing its reports)");
   addScoringOptions(*evalc);
 
   // terrain stream
-  CLI::App* strm = app.add_subcommand("stream", "send a capture or a simulated run to a UDP address as HDL-64E packets at the sensor's rate");
+  CLI::App* strm = app.add_subcommand(
+      "stream", "send a capture or a simulated run to a UDP address as HDL-64E packets at the sensor's rate");
   fs::path strm_pcap, strm_scene;
   int strm_frames = 60;
   std::string strm_to = "127.0.0.1:2368", strm_sim_config;
@@ -993,12 +1060,15 @@ int main(int argc, char** argv) {
   strm->add_option("--frames", strm_frames, "sweeps to simulate with --scene, 1-" + std::to_string(kMaxFrames))
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
-  strm->add_option("--sim-config", strm_sim_config, "YAML simulation settings for --scene (as for 'terrain record --sim-config')");
+  strm->add_option("--sim-config", strm_sim_config,
+                   "YAML simulation settings for --scene (as for 'terrain record --sim-config')");
   strm->add_option("--to", strm_to, "destination HOST:PORT (HOST an IPv4 address or localhost)")->capture_default_str();
-  strm->add_option("--speed", strm_speed, "pace relative to the real sensor (2: twice as fast), in (0, 100]")->capture_default_str();
+  strm->add_option("--speed", strm_speed, "pace relative to the real sensor (2: twice as fast), in (0, 100]")
+      ->capture_default_str();
 
   // terrain run
-  CLI::App* run = app.add_subcommand("run", "generate a scene, simulate the rig and reconstruct, streaming (no dataset on disk)");
+  CLI::App* run =
+      app.add_subcommand("run", "generate a scene, simulate the rig and reconstruct, streaming (no dataset on disk)");
   std::string run_scenario = "urban";
   std::uint64_t run_seed = 1;
   int run_frames = 60;
@@ -1024,7 +1094,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxFrames));
   run->add_option("--out", run_out, "output directory")->capture_default_str();
-  run->add_flag("--force", run_force, "replace an existing, non-empty output directory (whole, once the new one is complete)");
+  run->add_flag("--force", run_force,
+                "replace an existing, non-empty output directory (whole, once the new one is complete)");
   addLidarOptions(*run, "the simulated rig");
   addScoringOptions(*run);
   try {
@@ -1038,9 +1109,11 @@ int main(int argc, char** argv) {
   addPipelineOptions(*recon, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
   addPipelineOptions(*run, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
   run->add_option("--noise-seed", run_sim.seed, "sensor noise seed (>= 0)")->capture_default_str()->check(kSeed);
-  run->add_option("--sim-config", sim_config_file, "YAML file with simulation settings (as for 'terrain record --sim-config')");
+  run->add_option("--sim-config", sim_config_file,
+                  "YAML file with simulation settings (as for 'terrain record --sim-config')");
   run->add_option("--speed", run_sim.robot.speed, "robot speed along the path [m/s]")->capture_default_str();
-  run->add_option("--height-cap", run_sim.lidar.height_cap, "lidar returns higher than this above the sensor are dropped [m]")
+  run->add_option("--height-cap", run_sim.lidar.height_cap,
+                  "lidar returns higher than this above the sensor are dropped [m]")
       ->capture_default_str();
   run->add_option("--threads", run_sim.threads, "lidar simulation threads, 0 = all cores")->capture_default_str();
   addCameraRigOption(*run, run_sim.camera.rig);
@@ -1049,11 +1122,15 @@ int main(int argc, char** argv) {
   CLI::App* reg = app.add_subcommand("regress", "run a suite of scenarios and compare every metric with its baseline");
   fs::path reg_suite, reg_baseline, reg_write, reg_junit, reg_out;
   bool reg_force = false;
-  reg->add_option("--suite", reg_suite, "suite YAML: scenarios (type, seed, frames) and metrics with tolerances")->required();
-  reg->add_option("--baseline", reg_baseline, "baseline JSON to compare with; any metric past its tolerance fails the run (exit 1)");
-  reg->add_option("--write-baseline", reg_write, "run the suite and write its metrics as the new baseline (the only way baselines change)");
+  reg->add_option("--suite", reg_suite, "suite YAML: scenarios (type, seed, frames) and metrics with tolerances")
+      ->required();
+  reg->add_option("--baseline", reg_baseline,
+                  "baseline JSON to compare with; any metric past its tolerance fails the run (exit 1)");
+  reg->add_option("--write-baseline", reg_write,
+                  "run the suite and write its metrics as the new baseline (the only way baselines change)");
   reg->add_option("--junit", reg_junit, "also write the comparison as JUnit XML");
-  reg->add_option("--out", reg_out, "directory for the scenarios' outputs (default out/regress-SUITE, reused run after run)");
+  reg->add_option("--out", reg_out,
+                  "directory for the scenarios' outputs (default out/regress-SUITE, reused run after run)");
   std::string reg_shard;
   std::vector<fs::path> reg_merge;
   reg->add_option("--shard", reg_shard,
@@ -1071,11 +1148,13 @@ int main(int argc, char** argv) {
   addPipelineOptions(*reg, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings);
 
   // terrain kitti
-  CLI::App* kitti = app.add_subcommand("kitti", "score ground segmentation on real KITTI HDL-64E scans with SemanticKITTI labels");
+  CLI::App* kitti =
+      app.add_subcommand("kitti", "score ground segmentation on real KITTI HDL-64E scans with SemanticKITTI labels");
   std::vector<fs::path> kitti_scans;
   fs::path kitti_json;
   double kitti_height = 1.73;
-  kitti->add_option("--scan", kitti_scans, "KITTI .bin scan(s); labels are read from the .label file beside each")->required();
+  kitti->add_option("--scan", kitti_scans, "KITTI .bin scan(s); labels are read from the .label file beside each")
+      ->required();
   kitti->add_option("--sensor-height", kitti_height, "lidar height above the road [m]")->capture_default_str();
   kitti->add_option("--json", kitti_json, "also write the scores as JSON");
   addPipelineOptions(*kitti, pipe_cfg, pipe_config_file, histogram, solver, pipe_settings, true);
@@ -1111,7 +1190,9 @@ int main(int argc, char** argv) {
       if (!eval_out.empty()) {
         fs::create_directories(out);
         for (const char* f : {"report.json", "report.html"}) {
-          if (fs::exists(out / f)) throw io::InputError((out / f).string() + ": exists (give another --out, or leave --out out to replace the run's own reports)");
+          if (fs::exists(out / f))
+            throw io::InputError((out / f).string() +
+                                 ": exists (give another --out, or leave --out out to replace the run's own reports)");
         }
       }
       evaluate(*saved.pipeline, *saved.truth, &world, out, false, scoring);
@@ -1127,7 +1208,8 @@ int main(int argc, char** argv) {
     if (recon->parsed()) {
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       if (recon_input.empty()) {
-        if (lidar_choice.endpoint.empty()) throw io::InputError("give --input DATASET, or --lidar pcap:FILE to reconstruct a capture alone");
+        if (lidar_choice.endpoint.empty())
+          throw io::InputError("give --input DATASET, or --lidar pcap:FILE to reconstruct a capture alone");
         reconstructCapture(lidar_choice, pipe_cfg, recon_out, recon_force, scoring);
         return 0;
       }
@@ -1135,7 +1217,8 @@ int main(int argc, char** argv) {
       // a dataset recorded from a scene still on disk can be scored against it
       std::shared_ptr<sim::World> world;
       const auto producer = nlohmann::json::parse(dataset->producerJson());
-      if (producer.contains("scene") && producer["scene"].is_string() && fs::exists(producer["scene"].get<std::string>())) {
+      if (producer.contains("scene") && producer["scene"].is_string() &&
+          fs::exists(producer["scene"].get<std::string>())) {
         world = std::make_shared<sim::World>(producer["scene"].get<std::string>());
       } else if (producer.contains("scene") && producer["scene"].is_string()) {
         std::cerr << "terrain: warning: not scored: the scene the dataset was recorded from, "
@@ -1173,29 +1256,32 @@ int main(int argc, char** argv) {
     if (kitti->parsed()) {
       for (const std::string& s : pipe_settings) {
         if (s.rfind("voxel_map.", 0) != 0 && s.rfind("ground.", 0) != 0)
-          throw io::InputError("--set " + s + ": kitti segments single scans and reads only voxel_map and ground settings");
+          throw io::InputError("--set " + s +
+                               ": kitti segments single scans and reads only voxel_map and ground settings");
       }
       applyChoices(pipe_cfg, histogram, solver, pipe_settings);
       nlohmann::json all;
-      std::cout << std::fixed << std::setprecision(3) << "scan          method                 F1     IoU    precision recall\n";
+      std::cout << std::fixed << std::setprecision(3)
+                << "scan          method                 F1     IoU    precision recall\n";
       for (const auto& scan_path : kitti_scans) {
         const rig::KittiScan scan = rig::readKittiScan(scan_path);
         fs::path label_path = scan_path;
         label_path.replace_extension(".label");
         const auto labels = rig::readSemanticKittiLabels(label_path, scan.points.size());
         const auto j = eval::scoreKittiScan(scan.points, labels, pipe_cfg.voxel_map, pipe_cfg.ground, kitti_height);
-        for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
+        for (const char* m :
+             {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
           std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22) << m << std::right
-                    << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  " << j[m]["precision"].get<double>()
-                    << "     " << j[m]["recall"].get<double>() << "\n";
+                    << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  "
+                    << j[m]["precision"].get<double>() << "     " << j[m]["recall"].get<double>() << "\n";
         }
         // where the configured solver calls ground wrongly
         const auto& conf = j["confusion"];
         std::vector<std::pair<std::uint64_t, std::string>> wrong;
         for (auto it = conf["by_class"].begin(); it != conf["by_class"].end(); ++it) {
           const std::string name = it.key();
-          if (name == "road" || name == "parking" || name == "sidewalk" || name == "other-ground" || name == "terrain" ||
-              name == "vegetation")
+          if (name == "road" || name == "parking" || name == "sidewalk" || name == "other-ground" ||
+              name == "terrain" || name == "vegetation")
             continue;
           const auto n = it.value()["labelled_ground"].get<std::uint64_t>();
           if (n > 0) wrong.emplace_back(n, name);
@@ -1206,7 +1292,8 @@ int main(int argc, char** argv) {
         for (const auto& [n, name] : wrong) {
           std::cout << " " << name << " " << n << "/" << conf["by_class"][name]["points"].get<std::uint64_t>();
         }
-        std::cout << "\n" << std::left << std::setw(14) << scan_path.stem().string() << std::right
+        std::cout << "\n"
+                  << std::left << std::setw(14) << scan_path.stem().string() << std::right
                   << "false / missed ground by distance:";
         for (auto it = conf["by_distance"].begin(); it != conf["by_distance"].end(); ++it) {
           std::cout << " " << it.key() << " m " << it.value()["false_ground"].get<std::uint64_t>() << " / "
@@ -1228,19 +1315,26 @@ int main(int argc, char** argv) {
           std::cout << sc.id() << "\n";
         return 0;
       }
-      if (!reg_write.empty() && !reg_baseline.empty()) throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
-      if (sharded && !reg_write.empty()) throw io::InputError("--shard never writes a baseline: merge the shards with --merge and --write-baseline");
-      if (!sharded && reg_write.empty() && reg_baseline.empty()) throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");
+      if (!reg_write.empty() && !reg_baseline.empty())
+        throw io::InputError("give --baseline (to check) or --write-baseline (to refresh), not both");
+      if (sharded && !reg_write.empty())
+        throw io::InputError("--shard never writes a baseline: merge the shards with --merge and --write-baseline");
+      if (!sharded && reg_write.empty() && reg_baseline.empty())
+        throw io::InputError("give --baseline FILE to check against, or --write-baseline FILE to refresh it");
       const eval::Shard shard = sharded ? eval::parseShard(reg_shard) : eval::Shard{};
       const eval::Suite part = eval::shardOf(suite, shard);
-      const fs::path work = reg_out.empty() ? fs::path("out") / ("regress-" + suite.name + (sharded ? "-shard" + std::to_string(shard.k) : ""))
-                                            : reg_out;
+      const fs::path work =
+          reg_out.empty()
+              ? fs::path("out") / ("regress-" + suite.name + (sharded ? "-shard" + std::to_string(shard.k) : ""))
+              : reg_out;
       // refused before the suite runs, not after
       if (!reg_write.empty() && fs::exists(reg_write) && !reg_force) {
         throw io::InputError(reg_write.string() + ": exists (pass --force to replace it)");
       }
       if (!reg_out.empty() && fs::is_directory(reg_out) && !fs::is_empty(reg_out) && !reg_force) {
-        throw io::InputError(reg_out.string() + ": directory exists and is not empty (pass --force to replace what the suite writes there)");
+        throw io::InputError(
+            reg_out.string() +
+            ": directory exists and is not empty (pass --force to replace what the suite writes there)");
       }
       // on a cluster node, the cores Slurm gave the task, not every core of the node
       if (const char* cpus = std::getenv("SLURM_CPUS_PER_TASK"); cpus && run_sim.threads == 0) {

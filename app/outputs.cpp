@@ -43,8 +43,8 @@ OutputMesh outputMesh(const Pipeline& p) {
   auto key = [](const CellIndex& c) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 32) | static_cast<std::uint32_t>(c.y());
   };
-  auto add = [&](const CellIndex& c, float h, float sensed, std::array<std::uint8_t, 3> colour, bool unseen, bool recovered,
-                 bool inferred) {
+  auto add = [&](const CellIndex& c, float h, float sensed, std::array<std::uint8_t, 3> colour, bool unseen,
+                 bool recovered, bool inferred) {
     index.emplace(key(c), static_cast<std::uint32_t>(out.cells.size()));
     out.cells.push_back(c);
     out.heights.push_back(h);
@@ -55,7 +55,8 @@ OutputMesh outputMesh(const Pipeline& p) {
     out.inferred.push_back(inferred);
   };
   for (const auto& m : p.mesh().vertices()) {
-    add(m.cell, m.height(), m.sensed_height, vertexColour(p, m), !p.map().voxels()[m.top_voxel].coloured, m.raised(), false);
+    add(m.cell, m.height(), m.sensed_height, vertexColour(p, m), !p.map().voxels()[m.top_voxel].coloured, m.raised(),
+        false);
   }
   for (const auto& r : p.roofCells()) add(r.cell, r.height, std::nanf(""), kUnseenColour, true, true, true);
   out.triangles = gridTriangles(out.cells, [&](const CellIndex& c) -> std::int64_t {
@@ -261,11 +262,13 @@ void writeGlbs(const fs::path& dir, const Pipeline& p, const OutputMesh& mesh) {
     g.name = before ? "terrain, sensed only" : "terrain after recovery";
     for (std::size_t i = 0; i < mesh.cells.size(); ++i) {
       const float h = before ? mesh.sensed[i] : mesh.heights[i];
-      g.positions.emplace_back((mesh.cells[i].x() + 0.5) * cell, (mesh.cells[i].y() + 0.5) * cell, std::isnan(h) ? 0.0 : h);
+      g.positions.emplace_back((mesh.cells[i].x() + 0.5) * cell, (mesh.cells[i].y() + 0.5) * cell,
+                               std::isnan(h) ? 0.0 : h);
       g.colours.push_back(mesh.colours[i]);
     }
     for (const auto& t : mesh.triangles) {
-      if (before && (std::isnan(mesh.sensed[t[0]]) || std::isnan(mesh.sensed[t[1]]) || std::isnan(mesh.sensed[t[2]]))) continue;
+      if (before && (std::isnan(mesh.sensed[t[0]]) || std::isnan(mesh.sensed[t[1]]) || std::isnan(mesh.sensed[t[2]])))
+        continue;
       g.triangles.push_back(t);
     }
     io::writeFileAtomic(dir / (before ? "mesh_before.glb" : "mesh.glb"), encodeGlb(g), true);

@@ -3,8 +3,8 @@
 #include "rig/file_io.hpp"
 #include "rig/settings_io.hpp"
 
-#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
+#include <nlohmann/json.hpp>
 
 #include <map>
 
@@ -28,11 +28,13 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"voxel_map.voxel_size", num(c.voxel_map.voxel_size)},
       {"ground.histogram",
        [&c](const YAML::Node& n) {
-         if (!parseHistogram(n.as<std::string>(), c.ground.histogram)) throw YAML::Exception(n.Mark(), "expected global or local");
+         if (!parseHistogram(n.as<std::string>(), c.ground.histogram))
+           throw YAML::Exception(n.Mark(), "expected global or local");
        }},
       {"ground.solver",
        [&c](const YAML::Node& n) {
-         if (!parseSolver(n.as<std::string>(), c.ground.solver)) throw YAML::Exception(n.Mark(), "expected icm or mincut");
+         if (!parseSolver(n.as<std::string>(), c.ground.solver))
+           throw YAML::Exception(n.Mark(), "expected icm or mincut");
        }},
       {"ground.bin_size", num(c.ground.bin_size)},
       {"ground.delta", num(c.ground.delta)},
@@ -131,26 +133,31 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
 }  // namespace
 
 void validate(const PipelineConfig& c) {
-  require(c.voxel_map.voxel_size >= 0.02 && c.voxel_map.voxel_size <= 5, "voxel_map.voxel_size", c.voxel_map.voxel_size, "[0.02, 5] m");
+  require(c.voxel_map.voxel_size >= 0.02 && c.voxel_map.voxel_size <= 5, "voxel_map.voxel_size", c.voxel_map.voxel_size,
+          "[0.02, 5] m");
   require(c.segment_every >= 1, "segment_every", c.segment_every, ">= 1");
-  require(c.pose.heading_baseline > 0 && c.pose.heading_baseline <= 100, "pose.heading_baseline", c.pose.heading_baseline, "(0, 100] m");
+  require(c.pose.heading_baseline > 0 && c.pose.heading_baseline <= 100, "pose.heading_baseline",
+          c.pose.heading_baseline, "(0, 100] m");
   require(c.pose.max_speed > 0 && c.pose.max_speed <= 1000, "pose.max_speed", c.pose.max_speed, "(0, 1000] m/s");
-  require(c.pose.level_pitch_sigma > 0 && c.pose.level_pitch_sigma <= 1, "pose.level_pitch_sigma", c.pose.level_pitch_sigma,
-          "(0, 1] rad");
+  require(c.pose.level_pitch_sigma > 0 && c.pose.level_pitch_sigma <= 1, "pose.level_pitch_sigma",
+          c.pose.level_pitch_sigma, "(0, 1] rad");
   require(c.ground.bin_size > 0 && c.ground.bin_size <= 5, "ground.bin_size", c.ground.bin_size, "(0, 5] m");
   require(c.ground.delta > 0 && c.ground.delta <= 10, "ground.delta", c.ground.delta, "(0, 10] m");
-  require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin, "(0, 20] m");
+  require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin,
+          "(0, 20] m");
   require(c.ground.stack_height >= 0 && c.ground.stack_height <= 10, "ground.stack_height", c.ground.stack_height,
           "0 (off) or (0, 10] m");
   require(c.ground.tile_size >= 1 && c.ground.tile_size <= 1000, "ground.tile_size", c.ground.tile_size, "[1, 1000] m");
-  require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius, "[0, 10]");
+  require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius,
+          "[0, 10]");
   require(c.ground.histogram_stride >= 1 && c.ground.histogram_stride <= 8, "ground.histogram_stride",
           c.ground.histogram_stride, "[1, 8]");
   require(c.ground.alpha > 0, "ground.alpha", c.ground.alpha, "> 0");
   require(c.ground.beta > 0, "ground.beta", c.ground.beta, "> 0");
   require(c.ground.gamma > 0, "ground.gamma", c.ground.gamma, "> 0");
   require(c.ground.defer_share >= 0 && c.ground.defer_share <= 1, "ground.defer_share", c.ground.defer_share, "[0, 1]");
-  require(c.ground.icm_iterations >= 1 && c.ground.icm_iterations <= 1000, "ground.icm_iterations", c.ground.icm_iterations, "[1, 1000]");
+  require(c.ground.icm_iterations >= 1 && c.ground.icm_iterations <= 1000, "ground.icm_iterations",
+          c.ground.icm_iterations, "[1, 1000]");
   require(c.boundary.a != 0, "boundary.a", c.boundary.a, "non-zero");
   require(c.boundary.b != 0, "boundary.b", c.boundary.b, "non-zero");
   require(c.boundary.kx > 0 && c.boundary.kx < c.boundary.ky, "boundary.kx", c.boundary.kx, "(0, ky)");
@@ -173,8 +180,8 @@ void validate(const PipelineConfig& c) {
   require(c.estimation.spread_distance >= 0 && c.estimation.spread_distance <= 200, "estimation.spread_distance",
           c.estimation.spread_distance, "[0, 200] m");
   require(c.footprint.min_side > 0, "footprint.min_side", c.footprint.min_side, "> 0 m");
-  require(c.footprint.wall_tolerance >= 0 && c.footprint.wall_tolerance <= 10, "footprint.wall_tolerance", c.footprint.wall_tolerance,
-          "[0, 10] m");
+  require(c.footprint.wall_tolerance >= 0 && c.footprint.wall_tolerance <= 10, "footprint.wall_tolerance",
+          c.footprint.wall_tolerance, "[0, 10] m");
   require(c.footprint.wall_band >= 0 && c.footprint.wall_band <= 10, "footprint.wall_band", c.footprint.wall_band,
           "[0, 10] m");
   for (const auto& [name, share] : {std::pair{"footprint.min_wall_share", c.footprint.min_wall_share},
@@ -184,7 +191,8 @@ void validate(const PipelineConfig& c) {
     require(share >= 0 && share <= 1, name, share, "[0, 1]");
   }
   require(c.footprint.min_raised >= 1, "footprint.min_raised", c.footprint.min_raised, ">= 1");
-  require(c.crown.max_trunk_width > 0 && c.crown.max_trunk_width <= 10, "crown.max_trunk_width", c.crown.max_trunk_width, "(0, 10] m");
+  require(c.crown.max_trunk_width > 0 && c.crown.max_trunk_width <= 10, "crown.max_trunk_width",
+          c.crown.max_trunk_width, "(0, 10] m");
   require(c.crown.max_grown_width >= c.crown.max_trunk_width && c.crown.max_grown_width <= 20, "crown.max_grown_width",
           c.crown.max_grown_width, "[crown.max_trunk_width, 20] m");
   require(c.crown.min_trunk_height >= 0 && c.crown.min_trunk_height <= 20, "crown.min_trunk_height",
@@ -209,23 +217,26 @@ void validate(const PipelineConfig& c) {
   require(c.free_space.max_distance >= c.free_space.min_distance && c.free_space.max_distance <= 500,
           "free_space.max_distance", c.free_space.max_distance, "[free_space.min_distance, 500] m");
   require(c.free_space.margin >= 0 && c.free_space.margin <= 10, "free_space.margin", c.free_space.margin, "[0, 10] m");
-  require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre, "[0, 0.5]");
+  require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre,
+          "[0, 0.5]");
   require(c.hull.cell >= 0.05 && c.hull.cell <= 5, "hull.cell", c.hull.cell, "[0.05, 5] m");
   require(c.hull.layer >= 0.05 && c.hull.layer <= 5, "hull.layer", c.hull.layer, "[0.05, 5] m");
-  require(c.hull.max_height > 0 && c.hull.max_height <= 200 && c.hull.max_height / c.hull.layer <= 1000, "hull.max_height",
-          c.hull.max_height, "(0, 200] m and at most 1000 layers of hull.layer");
+  require(c.hull.max_height > 0 && c.hull.max_height <= 200 && c.hull.max_height / c.hull.layer <= 1000,
+          "hull.max_height", c.hull.max_height, "(0, 200] m and at most 1000 layers of hull.layer");
   require(c.hull.max_radius > 0 && c.hull.max_radius <= 50 && c.hull.max_radius / c.hull.cell <= 200, "hull.max_radius",
           c.hull.max_radius, "(0, 50] m and at most 200 cells of hull.cell");
-  require(c.hull.max_distance > 0 && c.hull.max_distance <= 500, "hull.max_distance", c.hull.max_distance, "(0, 500] m");
+  require(c.hull.max_distance > 0 && c.hull.max_distance <= 500, "hull.max_distance", c.hull.max_distance,
+          "(0, 500] m");
   require(c.hull.min_views >= 1 && c.hull.min_views <= 10000, "hull.min_views", c.hull.min_views, "[1, 10000]");
-  require(c.hull.min_parallax >= 0 && c.hull.min_parallax <= 3.14, "hull.min_parallax", c.hull.min_parallax, "[0, 3.14] rad");
-  require(c.hull.min_foliage_share >= 0 && c.hull.min_foliage_share <= 1, "hull.min_foliage_share", c.hull.min_foliage_share,
-          "[0, 1]");
+  require(c.hull.min_parallax >= 0 && c.hull.min_parallax <= 3.14, "hull.min_parallax", c.hull.min_parallax,
+          "[0, 3.14] rad");
+  require(c.hull.min_foliage_share >= 0 && c.hull.min_foliage_share <= 1, "hull.min_foliage_share",
+          c.hull.min_foliage_share, "[0, 1]");
   require(c.hull.max_sky_share >= 0 && c.hull.max_sky_share <= 1, "hull.max_sky_share", c.hull.max_sky_share, "[0, 1]");
   require(c.hull.horizon_margin >= -0.5 && c.hull.horizon_margin <= 0.5, "hull.horizon_margin", c.hull.horizon_margin,
           "[-0.5, 0.5] rad");
-  require(c.hull.horizon_distance >= 0 && c.hull.horizon_distance <= 1000, "hull.horizon_distance", c.hull.horizon_distance,
-          "[0, 1000] m");
+  require(c.hull.horizon_distance >= 0 && c.hull.horizon_distance <= 1000, "hull.horizon_distance",
+          c.hull.horizon_distance, "[0, 1000] m");
   require(c.estimation.max_estimates >= 1 && c.estimation.max_estimates <= 1000, "estimation.max_estimates",
           static_cast<double>(c.estimation.max_estimates), "[1, 1000]");
   require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
@@ -233,7 +244,8 @@ void validate(const PipelineConfig& c) {
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  io::applySettings(path, fields(c), "pose, voxel_map, ground, boundary, estimation, footprint, crown, hull, free_space");
+  io::applySettings(path, fields(c),
+                    "pose, voxel_map, ground, boundary, estimation, footprint, crown, hull, free_space");
 }
 
 void applyPipelineSetting(const std::string& key_value, PipelineConfig& c, const std::string& option) {
@@ -243,55 +255,96 @@ void applyPipelineSetting(const std::string& key_value, PipelineConfig& c, const
 std::string pipelineConfigToJson(const PipelineConfig& c) {
   nlohmann::json j;
   j["segment_every"] = c.segment_every;
-  j["pose"] = {{"heading_baseline", c.pose.heading_baseline}, {"level_min_range", c.pose.level_min_range},
-               {"level_max_range", c.pose.level_max_range}, {"level_pitch_sigma", c.pose.level_pitch_sigma},
+  j["pose"] = {{"heading_baseline", c.pose.heading_baseline},
+               {"level_min_range", c.pose.level_min_range},
+               {"level_max_range", c.pose.level_max_range},
+               {"level_pitch_sigma", c.pose.level_pitch_sigma},
                {"max_speed", c.pose.max_speed}};
   j["voxel_map"] = {{"voxel_size", c.voxel_map.voxel_size}};
   j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
                  {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
-                 {"bin_size", c.ground.bin_size}, {"delta", c.ground.delta}, {"range_margin", c.ground.range_margin},
+                 {"bin_size", c.ground.bin_size},
+                 {"delta", c.ground.delta},
+                 {"range_margin", c.ground.range_margin},
                  {"stack_height", c.ground.stack_height},
-                 {"tile_size", c.ground.tile_size}, {"tile_radius", c.ground.tile_radius},
-                 {"histogram_stride", c.ground.histogram_stride}, {"alpha", c.ground.alpha},
-                 {"beta", c.ground.beta}, {"gamma", c.ground.gamma}, {"icm_iterations", c.ground.icm_iterations},
-                 {"threads", c.ground.threads}, {"defer_share", c.ground.defer_share}};
-  j["boundary"] = {{"a", c.boundary.a}, {"b", c.boundary.b}, {"kx", c.boundary.kx}, {"ky", c.boundary.ky},
-                   {"threshold", c.boundary.threshold}, {"erode_width", c.boundary.erode_width},
-                   {"erode_height", c.boundary.erode_height}, {"dilate_width", c.boundary.dilate_width},
-                   {"dilate_height", c.boundary.dilate_height}, {"erode_all_directions", c.boundary.erode_all_directions},
-                   {"erode_sloping", c.boundary.erode_sloping}, {"foliage_margin", c.boundary.foliage_margin}};
-  j["estimation"] = {{"max_distance", c.estimation.max_distance}, {"max_height", c.estimation.max_height},
-                     {"top_margin", c.estimation.top_margin}, {"max_estimates", c.estimation.max_estimates},
+                 {"tile_size", c.ground.tile_size},
+                 {"tile_radius", c.ground.tile_radius},
+                 {"histogram_stride", c.ground.histogram_stride},
+                 {"alpha", c.ground.alpha},
+                 {"beta", c.ground.beta},
+                 {"gamma", c.ground.gamma},
+                 {"icm_iterations", c.ground.icm_iterations},
+                 {"threads", c.ground.threads},
+                 {"defer_share", c.ground.defer_share}};
+  j["boundary"] = {{"a", c.boundary.a},
+                   {"b", c.boundary.b},
+                   {"kx", c.boundary.kx},
+                   {"ky", c.boundary.ky},
+                   {"threshold", c.boundary.threshold},
+                   {"erode_width", c.boundary.erode_width},
+                   {"erode_height", c.boundary.erode_height},
+                   {"dilate_width", c.boundary.dilate_width},
+                   {"dilate_height", c.boundary.dilate_height},
+                   {"erode_all_directions", c.boundary.erode_all_directions},
+                   {"erode_sloping", c.boundary.erode_sloping},
+                   {"foliage_margin", c.boundary.foliage_margin}};
+  j["estimation"] = {{"max_distance", c.estimation.max_distance},
+                     {"max_height", c.estimation.max_height},
+                     {"top_margin", c.estimation.top_margin},
+                     {"max_estimates", c.estimation.max_estimates},
                      {"fusion_quantile", c.estimation.fusion_quantile},
-                     {"clear_line", c.estimation.clear_line}, {"require_sky_above", c.estimation.require_sky_above},
-                     {"sky_blue_margin", c.estimation.sky_blue_margin}, {"sky_min_brightness", c.estimation.sky_min_brightness},
-                     {"foliage_tops", c.estimation.foliage_tops}, {"foliage_margin", c.estimation.foliage_margin},
+                     {"clear_line", c.estimation.clear_line},
+                     {"require_sky_above", c.estimation.require_sky_above},
+                     {"sky_blue_margin", c.estimation.sky_blue_margin},
+                     {"sky_min_brightness", c.estimation.sky_min_brightness},
+                     {"foliage_tops", c.estimation.foliage_tops},
+                     {"foliage_margin", c.estimation.foliage_margin},
                      {"spread_distance", c.estimation.spread_distance},
-                     {"parallax_slope", c.estimation.parallax_slope}, {"parallax_change", c.estimation.parallax_change},
-                     {"parallax_min_gap", c.estimation.parallax_min_gap}, {"parallax_max_gap", c.estimation.parallax_max_gap},
+                     {"parallax_slope", c.estimation.parallax_slope},
+                     {"parallax_change", c.estimation.parallax_change},
+                     {"parallax_min_gap", c.estimation.parallax_min_gap},
+                     {"parallax_max_gap", c.estimation.parallax_max_gap},
                      {"parallax_min_t", c.estimation.parallax_min_t},
                      {"hold_young_crowns", c.estimation.hold_young_crowns}};
-  j["footprint"] = {{"enabled", c.footprint.enabled}, {"min_side", c.footprint.min_side},
-                    {"wall_tolerance", c.footprint.wall_tolerance}, {"wall_band", c.footprint.wall_band},
+  j["footprint"] = {{"enabled", c.footprint.enabled},
+                    {"min_side", c.footprint.min_side},
+                    {"wall_tolerance", c.footprint.wall_tolerance},
+                    {"wall_band", c.footprint.wall_band},
                     {"min_wall_share", c.footprint.min_wall_share},
-                    {"min_side_support", c.footprint.min_side_support}, {"max_inside_share", c.footprint.max_inside_share},
-                    {"min_raised", c.footprint.min_raised}, {"min_raised_share", c.footprint.min_raised_share}};
-  j["crown"] = {{"enabled", c.crown.enabled}, {"cue", c.crown.cue == CrownConfig::Cue::Foliage ? "foliage" : "sky"},
-                {"foliage_margin", c.crown.foliage_margin}, {"max_trunk_gap", c.crown.max_trunk_gap},
-                {"max_trunk_width", c.crown.max_trunk_width}, {"max_grown_width", c.crown.max_grown_width},
+                    {"min_side_support", c.footprint.min_side_support},
+                    {"max_inside_share", c.footprint.max_inside_share},
+                    {"min_raised", c.footprint.min_raised},
+                    {"min_raised_share", c.footprint.min_raised_share}};
+  j["crown"] = {{"enabled", c.crown.enabled},
+                {"cue", c.crown.cue == CrownConfig::Cue::Foliage ? "foliage" : "sky"},
+                {"foliage_margin", c.crown.foliage_margin},
+                {"max_trunk_gap", c.crown.max_trunk_gap},
+                {"max_trunk_width", c.crown.max_trunk_width},
+                {"max_grown_width", c.crown.max_grown_width},
                 {"min_trunk_height", c.crown.min_trunk_height},
-                {"min_radius", c.crown.min_radius}, {"max_radius", c.crown.max_radius},
-                {"min_samples", c.crown.min_samples}, {"max_top_spread", c.crown.max_top_spread},
-                {"min_height_px", c.crown.min_height_px}, {"min_baseline", c.crown.min_baseline},
+                {"min_radius", c.crown.min_radius},
+                {"max_radius", c.crown.max_radius},
+                {"min_samples", c.crown.min_samples},
+                {"max_top_spread", c.crown.max_top_spread},
+                {"min_height_px", c.crown.min_height_px},
+                {"min_baseline", c.crown.min_baseline},
                 {"max_offcentre", c.crown.max_offcentre}};
-  j["hull"] = {{"enabled", c.hull.enabled}, {"cell", c.hull.cell}, {"layer", c.hull.layer},
-               {"max_height", c.hull.max_height}, {"max_radius", c.hull.max_radius},
-               {"max_distance", c.hull.max_distance}, {"min_views", c.hull.min_views},
+  j["hull"] = {{"enabled", c.hull.enabled},
+               {"cell", c.hull.cell},
+               {"layer", c.hull.layer},
+               {"max_height", c.hull.max_height},
+               {"max_radius", c.hull.max_radius},
+               {"max_distance", c.hull.max_distance},
+               {"min_views", c.hull.min_views},
                {"min_parallax", c.hull.min_parallax},
-               {"min_foliage_share", c.hull.min_foliage_share}, {"max_sky_share", c.hull.max_sky_share},
-               {"horizon_margin", c.hull.horizon_margin}, {"horizon_distance", c.hull.horizon_distance}};
-  j["free_space"] = {{"enabled", c.free_space.enabled}, {"min_distance", c.free_space.min_distance},
-                     {"max_distance", c.free_space.max_distance}, {"margin", c.free_space.margin}};
+               {"min_foliage_share", c.hull.min_foliage_share},
+               {"max_sky_share", c.hull.max_sky_share},
+               {"horizon_margin", c.hull.horizon_margin},
+               {"horizon_distance", c.hull.horizon_distance}};
+  j["free_space"] = {{"enabled", c.free_space.enabled},
+                     {"min_distance", c.free_space.min_distance},
+                     {"max_distance", c.free_space.max_distance},
+                     {"margin", c.free_space.margin}};
   return j.dump();
 }
 

@@ -3,10 +3,10 @@
 // is redrawn in place; otherwise a line is printed every tenth of the job. A job of unknown length
 // (total < 0: a live sensor, a capture) reports the frames done and the rate, every 50 frames off a terminal.
 
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <string>
-#include <unistd.h>
 
 namespace terrain::app {
 
@@ -22,7 +22,8 @@ class Progress {
     const double left = rate > 0 ? (total_ - done) / rate : 0.0;
     if (total_ < 0) {
       if (!tty_ && done % 50 != 0) return;
-      std::fprintf(stderr, "%s%s: %d frames, %.2f frames/s%s", tty_ ? "\r" : "", what_.c_str(), done, rate, tty_ ? "   " : "\n");
+      std::fprintf(stderr, "%s%s: %d frames, %.2f frames/s%s", tty_ ? "\r" : "", what_.c_str(), done, rate,
+                   tty_ ? "   " : "\n");
       std::fflush(stderr);
       open_line_ = tty_;
       return;

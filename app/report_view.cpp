@@ -55,7 +55,8 @@ std::string reportView(const Pipeline& p, const eval::RunTruth& truth, const sim
   std::ostringstream h;
   h << "<h2>3D view</h2>";
   if (kViewBundle[0] == '\0') {
-    h << "<p id=\"terrain-view-status\"><b>No 3D view:</b> " << kViewMissing << ". The rest of the report is complete.</p>";
+    h << "<p id=\"terrain-view-status\"><b>No 3D view:</b> " << kViewMissing
+      << ". The rest of the report is complete.</p>";
     return h.str();
   }
   const auto& vertices = p.mesh().vertices();
@@ -68,7 +69,8 @@ std::string reportView(const Pipeline& p, const eval::RunTruth& truth, const sim
   };
   std::vector<Cell> cells;
   cells.reserve(vertices.size() + p.roofCells().size());
-  for (const auto& m : vertices) cells.push_back({m.cell.x(), m.cell.y(), m.sensed_height, m.height(), vertexColour(p, m)});
+  for (const auto& m : vertices)
+    cells.push_back({m.cell.x(), m.cell.y(), m.sensed_height, m.height(), vertexColour(p, m)});
   for (const auto& r : p.roofCells()) {
     cells.push_back({r.cell.x(), r.cell.y(), std::numeric_limits<float>::quiet_NaN(), r.height, kUnseenColour});
   }
@@ -86,7 +88,8 @@ std::string reportView(const Pipeline& p, const eval::RunTruth& truth, const sim
     }
     if (occupied.size() <= kViewVertexBudget) break;
   }
-  std::int64_t x0 = std::numeric_limits<std::int64_t>::max(), y0 = x0, x1 = std::numeric_limits<std::int64_t>::min(), y1 = x1;
+  std::int64_t x0 = std::numeric_limits<std::int64_t>::max(), y0 = x0, x1 = std::numeric_limits<std::int64_t>::min(),
+               y1 = x1;
   for (const Cell& c : cells) {
     x0 = std::min(x0, binOf(c.x, step)), x1 = std::max(x1, binOf(c.x, step));
     y0 = std::min(y0, binOf(c.y, step)), y1 = std::max(y1, binOf(c.y, step));
@@ -146,21 +149,25 @@ std::string reportView(const Pipeline& p, const eval::RunTruth& truth, const sim
                                {"path", path},
                                {"cameras", cameras}};
   if (grid) *grid = {cell, step, count, cells.size()};
-  h << "<p>The reconstruction in 3D (world ENU, z up): <span id=\"terrain-view-count\">" << count << "</span> vertices, ";
+  h << "<p>The reconstruction in 3D (world ENU, z up): <span id=\"terrain-view-count\">" << count
+    << "</span> vertices, ";
   if (step > 1) {
     h << "decimated from " << cells.size() << " mesh vertices and roof cells: binned to a grid of " << cell << " m ("
       << step << " &times; " << step << " cells, the highest of each), since the view embeds at most "
       << kViewVertexBudget << " points";
   } else {
-    h << "every mesh vertex and roof cell (the view embeds at most " << kViewVertexBudget << " points; more are binned)";
+    h << "every mesh vertex and roof cell (the view embeds at most " << kViewVertexBudget
+      << " points; more are binned)";
   }
-  h << "; heights to " << std::ceil(q * 1000.0) << " mm. Yellow: never in a camera image. Red line: the robot's estimated path; orange dots: the cameras at the "
+  h << "; heights to " << std::ceil(q * 1000.0)
+    << " mm. Yellow: never in a camera image. Red line: the robot's estimated path; orange dots: the cameras at the "
        "report's frames.</p>"
        "<form id=\"terrain-view-controls\" style=\"margin:6px 0\">"
        "<label><input type=\"radio\" name=\"layer\" value=\"after\" checked> after recovery</label> "
        "<label><input type=\"radio\" name=\"layer\" value=\"before\"> sensed only</label> "
        "<label><input type=\"radio\" name=\"layer\" value=\"truth\"> ground truth (colour = height)</label> "
-       "<label><input type=\"radio\" name=\"layer\" value=\"error\"> error after recovery (blue &minus;10 m, red +10 m)</label>"
+       "<label><input type=\"radio\" name=\"layer\" value=\"error\"> error after recovery (blue &minus;10 m, red +10 "
+       "m)</label>"
        " &nbsp; <label><input type=\"checkbox\" name=\"truth\"> truth as a transparent layer</label> "
        "<label><input type=\"checkbox\" name=\"path\" checked> path</label> "
        "<label><input type=\"checkbox\" name=\"cameras\" checked> cameras</label></form>"

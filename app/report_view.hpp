@@ -17,10 +17,10 @@ constexpr std::size_t kViewVertexBudget = 160000;
 
 // What the view embeds.
 struct ViewGrid {
-  double cell = 0;              // [m] grid step (a multiple of the voxel size)
-  int step = 1;                 // mesh cells per grid step either way
-  std::size_t vertices = 0;     // grid points with a height after recovery
-  std::size_t mesh_cells = 0;   // mesh vertices and roof cells they were binned from
+  double cell = 0;             // [m] grid step (a multiple of the voxel size)
+  int step = 1;                // mesh cells per grid step either way
+  std::size_t vertices = 0;    // grid points with a height after recovery
+  std::size_t mesh_cells = 0;  // mesh vertices and roof cells they were binned from
 };
 
 // The view as an HTML section (a heading, the controls, the canvas holder, the data and the

@@ -44,7 +44,8 @@ class In {
  public:
   In(std::string bytes, std::string origin) : bytes_(std::move(bytes)), origin_(std::move(origin)) {
     const std::size_t m = std::strlen(kMagic);
-    if (bytes_.compare(0, m, kMagic) != 0) throw io::InputError(origin_ + ": not a terrain run state (" + kRunStateFormat + ")");
+    if (bytes_.compare(0, m, kMagic) != 0)
+      throw io::InputError(origin_ + ": not a terrain run state (" + kRunStateFormat + ")");
     pos_ = m;
   }
   template <typename T>
@@ -58,7 +59,8 @@ class In {
   template <typename T>
   std::vector<T> getAll(const char* what) {
     const auto n = get<std::uint64_t>(what);
-    if (n > (bytes_.size() - pos_) / sizeof(T)) fail(std::string(what) + ": " + std::to_string(n) + " entries do not fit in the file");
+    if (n > (bytes_.size() - pos_) / sizeof(T))
+      fail(std::string(what) + ": " + std::to_string(n) + " entries do not fit in the file");
     std::vector<T> v(static_cast<std::size_t>(n));
     std::memcpy(v.data(), bytes_.data() + pos_, v.size() * sizeof(T));
     pos_ += v.size() * sizeof(T);
@@ -107,7 +109,8 @@ constexpr std::size_t kVoxelBytes = 3 * 4 + 4 + 4 + 3 + 1 + 1 + 4;
 
 void putRecord(Out& o, const FrameRecord& r) {
   o.put<std::int32_t>(r.frame), o.put(r.time);
-  for (double t : {r.pose_ms, r.voxel_ms, r.mesh_ms, r.segmentation_ms, r.boundary_ms, r.estimation_ms, r.total_ms}) o.put(t);
+  for (double t : {r.pose_ms, r.voxel_ms, r.mesh_ms, r.segmentation_ms, r.boundary_ms, r.estimation_ms, r.total_ms})
+    o.put(t);
   o.put<std::uint64_t>(r.points), o.put<std::uint64_t>(r.new_voxels), o.put<std::uint64_t>(r.voxels);
   o.put<std::int32_t>(r.estimated_vertices);
   o.put(r.position.x()), o.put(r.position.y()), o.put(r.position.z());
@@ -116,10 +119,12 @@ void putRecord(Out& o, const FrameRecord& r) {
 FrameRecord getRecord(In& in) {
   FrameRecord r;
   r.frame = in.get<std::int32_t>("record"), r.time = in.get<double>("record");
-  for (double* t : {&r.pose_ms, &r.voxel_ms, &r.mesh_ms, &r.segmentation_ms, &r.boundary_ms, &r.estimation_ms, &r.total_ms}) {
+  for (double* t :
+       {&r.pose_ms, &r.voxel_ms, &r.mesh_ms, &r.segmentation_ms, &r.boundary_ms, &r.estimation_ms, &r.total_ms}) {
     *t = in.get<double>("record");
   }
-  r.points = in.get<std::uint64_t>("record"), r.new_voxels = in.get<std::uint64_t>("record"), r.voxels = in.get<std::uint64_t>("record");
+  r.points = in.get<std::uint64_t>("record"), r.new_voxels = in.get<std::uint64_t>("record"),
+  r.voxels = in.get<std::uint64_t>("record");
   r.estimated_vertices = in.get<std::int32_t>("record");
   const double x = in.get<double>("record"), y = in.get<double>("record"), z = in.get<double>("record");
   r.position = Point3(x, y, z);
@@ -205,18 +210,24 @@ void writeRunState(const fs::path& out, const Pipeline& pipeline, const eval::Ru
     const std::string& camera = pipeline.calibration().cameras.at(c.camera).name;
     const Eigen::Matrix4d m = c.world_from_camera.matrix();
     for (int i = 0; i < 16; ++i) t.put(m(i / 4, i % 4));
-    io::writeFileAtomic(dir / "cameras" / cameraName(c.frame, camera, "rgb"), [&] {
-      std::vector<unsigned char> png;
-      cv::Mat bgr;
-      cv::cvtColor(c.rgb, bgr, cv::COLOR_RGB2BGR);
-      cv::imencode(".png", bgr, png);
-      return std::string(png.begin(), png.end());
-    }(), true);
-    io::writeFileAtomic(dir / "cameras" / cameraName(c.frame, camera, "seg"), [&] {
-      std::vector<unsigned char> png;
-      cv::imencode(".png", c.segmentation, png);
-      return std::string(png.begin(), png.end());
-    }(), true);
+    io::writeFileAtomic(
+        dir / "cameras" / cameraName(c.frame, camera, "rgb"),
+        [&] {
+          std::vector<unsigned char> png;
+          cv::Mat bgr;
+          cv::cvtColor(c.rgb, bgr, cv::COLOR_RGB2BGR);
+          cv::imencode(".png", bgr, png);
+          return std::string(png.begin(), png.end());
+        }(),
+        true);
+    io::writeFileAtomic(
+        dir / "cameras" / cameraName(c.frame, camera, "seg"),
+        [&] {
+          std::vector<unsigned char> png;
+          cv::imencode(".png", c.segmentation, png);
+          return std::string(png.begin(), png.end());
+        }(),
+        true);
   }
   nlohmann::json j;
   j["format"] = kRunStateFormat;
@@ -239,7 +250,9 @@ SavedRun readRunState(const fs::path& out) {
   const fs::path dir = out / "state";
   const fs::path state_file = dir / "state.json";
   if (!fs::exists(state_file)) {
-    throw io::InputError(state_file.string() + ": missing (not a run directory of 'terrain run' or 'terrain reconstruct', or an unfinished one)");
+    throw io::InputError(
+        state_file.string() +
+        ": missing (not a run directory of 'terrain run' or 'terrain reconstruct', or an unfinished one)");
   }
   nlohmann::json j;
   try {
@@ -264,12 +277,13 @@ SavedRun readRunState(const fs::path& out) {
       const auto found = now.find(it.key());
       if (found == now.end()) throw io::InputError(file.string() + ": the run's scene file is no longer there");
       if (!it.value().is_string() || found->second != it.value().get<std::string>()) {
-        throw io::InputError(file.string() + ": changed since the run (it no longer matches what " + state_file.string() +
-                             " recorded); run again to score the new scene");
+        throw io::InputError(file.string() + ": changed since the run (it no longer matches what " +
+                             state_file.string() + " recorded); run again to score the new scene");
       }
     }
   }
-  const RigCalibration calibration = rig::calibrationFromJson(j["calibration"].dump(), state_file.string() + " (calibration)");
+  const RigCalibration calibration =
+      rig::calibrationFromJson(j["calibration"].dump(), state_file.string() + " (calibration)");
   PipelineConfig config;
   loadPipelineConfig(dir / "pipeline_config.json", config);
   try {
@@ -311,13 +325,16 @@ SavedRun readRunState(const fs::path& out) {
     c.centre = Eigen::Vector2f(x, y);
     for (std::uint16_t& n : c.outcomes) n = p.get<std::uint16_t>("crown record outcomes");
     const auto verdict = p.get<std::uint8_t>("crown record verdict");
-    if (verdict > static_cast<std::uint8_t>(CrownVerdict::Raised)) p.fail("crown record verdict " + std::to_string(verdict) + " is unknown");
+    if (verdict > static_cast<std::uint8_t>(CrownVerdict::Raised))
+      p.fail("crown record verdict " + std::to_string(verdict) + " is unknown");
     c.verdict = static_cast<CrownVerdict>(verdict);
   }
   p.end();
   run.pipeline = std::make_unique<Pipeline>(calibration, config);
   if (!run.pipeline->restore(std::move(voxels), std::move(vertices), std::move(s), std::move(records), crowns)) {
-    p.fail("voxels, mesh and labels do not fit together (duplicate voxels or cells, a voxel index beyond +-1 M, labels not one per voxel, or a vertex's top voxel out of range)");
+    p.fail(
+        "voxels, mesh and labels do not fit together (duplicate voxels or cells, a voxel index beyond +-1 M, labels "
+        "not one per voxel, or a vertex's top voxel out of range)");
   }
 
   // the truth

@@ -43,7 +43,8 @@ cv::Mat slopingRuns(const cv::Mat& raw, const cv::Mat& image, const BoundaryDete
   }
   if (image.type() == CV_8UC3) {
     cv::Mat foliage;
-    cv::dilate(foliageMask(image, c.foliage_margin), foliage, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+    cv::dilate(foliageMask(image, c.foliage_margin), foliage,
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
     runs &= ~foliage;
   }
   return runs;

@@ -9,13 +9,13 @@
 namespace terrain {
 
 struct BoundaryDetectionConfig {
-  double a = 1.0;           // kernel corner weight
-  double b = 2.0;           // kernel centre-row/column weight
-  double kx = 0.3;          // weight of horizontal change
-  double ky = 1.0;          // weight of vertical change (> kx)
-  double threshold = 60.0;  // gradient magnitude, grey levels (0-255 image)
-  int erode_width = 5, erode_height = 1;   // [px] erosion mask: keeps horizontal runs of 5 px or more, drops specks
-  int dilate_width = 3, dilate_height = 3; // [px] dilation mask
+  double a = 1.0;                           // kernel corner weight
+  double b = 2.0;                           // kernel centre-row/column weight
+  double kx = 0.3;                          // weight of horizontal change
+  double ky = 1.0;                          // weight of vertical change (> kx)
+  double threshold = 60.0;                  // gradient magnitude, grey levels (0-255 image)
+  int erode_width = 5, erode_height = 1;    // [px] erosion mask: keeps horizontal runs of 5 px or more, drops specks
+  int dilate_width = 3, dilate_height = 3;  // [px] dilation mask
   // Erode along four directions (0, 45, 90 and 135 degrees) with a line of erode_width px, each
   // followed by a dilation with the same line, and keep what survives in any: thin boundaries of
   // every direction that run at least erode_width px (the curved top of a tree crown, a sloping

@@ -60,28 +60,44 @@ std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, cons
 
 const char* outcomeName(CrownOutcome outcome) {
   switch (outcome) {
-    case CrownOutcome::Measured: return "measured";
-    case CrownOutcome::NoCrown: return "no_crown";
-    case CrownOutcome::TooShort: return "too_short";
-    case CrownOutcome::Unbounded: return "unbounded";
-    case CrownOutcome::OffCentre: return "off_centre";
-    case CrownOutcome::NearerTrunk: return "nearer_trunk";
-    case CrownOutcome::Implausible: return "implausible";
-    case CrownOutcome::NotClear: return "not_clear";
-    case CrownOutcome::NotAboveGround: return "not_above_ground";
+    case CrownOutcome::Measured:
+      return "measured";
+    case CrownOutcome::NoCrown:
+      return "no_crown";
+    case CrownOutcome::TooShort:
+      return "too_short";
+    case CrownOutcome::Unbounded:
+      return "unbounded";
+    case CrownOutcome::OffCentre:
+      return "off_centre";
+    case CrownOutcome::NearerTrunk:
+      return "nearer_trunk";
+    case CrownOutcome::Implausible:
+      return "implausible";
+    case CrownOutcome::NotClear:
+      return "not_clear";
+    case CrownOutcome::NotAboveGround:
+      return "not_above_ground";
   }
   return "unknown";
 }
 
 const char* verdictName(CrownVerdict verdict) {
   switch (verdict) {
-    case CrownVerdict::NotApplied: return "not_applied";
-    case CrownVerdict::TooFewSamples: return "too_few_samples";
-    case CrownVerdict::NoBaseline: return "no_baseline";
-    case CrownVerdict::Sunk: return "sunk";
-    case CrownVerdict::Disagree: return "disagree";
-    case CrownVerdict::TooNarrow: return "too_narrow";
-    case CrownVerdict::Raised: return "raised";
+    case CrownVerdict::NotApplied:
+      return "not_applied";
+    case CrownVerdict::TooFewSamples:
+      return "too_few_samples";
+    case CrownVerdict::NoBaseline:
+      return "no_baseline";
+    case CrownVerdict::Sunk:
+      return "sunk";
+    case CrownVerdict::Disagree:
+      return "disagree";
+    case CrownVerdict::TooNarrow:
+      return "too_narrow";
+    case CrownVerdict::Raised:
+      return "raised";
   }
   return "unknown";
 }

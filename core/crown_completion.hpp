@@ -61,16 +61,16 @@ struct CrownConfig {
   // raised). Real trunks the lidar saw only low stood 0.5-1 m above it: at 1 m forest seed 1 lost
   // 319 of 533 cells raised under crowns.
   double min_trunk_height = 0.5;
-  double min_radius = 0.6;       // [m] a narrower top is a pole's, not a crown
-  double max_radius = 8.0;       // [m] wider runs are not one crown
-  int min_samples = 3;           // frames that must have measured a crown
+  double min_radius = 0.6;  // [m] a narrower top is a pole's, not a crown
+  double max_radius = 8.0;  // [m] wider runs are not one crown
+  int min_samples = 3;      // frames that must have measured a crown
   // A sample's crown top bounds the crown from above (foliage behind or before the crown in its
   // column only lifts it): the crown's top is the median of the lowest group of samples whose tops
   // lie within this share above the group's lowest (a share of its height above the ground around
   // the trunk, or above the trunk's sensed top where no ground is near: world heights may be
-  // negative), with min_samples samples whose cameras spread min_baseline. Before, the median of all samples with their interquartile range within this
-  // share of it: on 60 frames of the 12 scenes (above) trees at their real height 128 -> 129 of 332
-  // (urban 4 tree_042: five samples at 12.4-12.7 m from the first 2.5 m of the drive, then eight at
+  // negative), with min_samples samples whose cameras spread min_baseline. Before, the median of all samples with their
+  // interquartile range within this share of it: on 60 frames of the 12 scenes (above) trees at their real height 128
+  // -> 129 of 332 (urban 4 tree_042: five samples at 12.4-12.7 m from the first 2.5 m of the drive, then eight at
   // 15.3-16.2 m rising as the camera neared, a crown behind), nothing else changed.
   double max_top_spread = 0.1;
   // [m] the samples' camera positions must spread this far: a crown behind the column moves against
@@ -83,9 +83,9 @@ struct CrownConfig {
   // tree_050), 1.25 m 133 (23, but urban 3's terrain 22 -> 322: a false crown whose samples'
   // cameras lie 1.25-1.5 m apart), 1 m 134 (24, 1374). 1.5 keeps a quarter of a metre from that.
   double min_baseline = 1.5;
-  int min_height_px = 3;         // [px] crown rows needed in the trunk's column
-  double max_offcentre = 0.2;    // the widest run's centre may lie this share of its width (+1 px)
-                                 // beside the trunk's column; farther, the run is another crown
+  int min_height_px = 3;       // [px] crown rows needed in the trunk's column
+  double max_offcentre = 0.2;  // the widest run's centre may lie this share of its width (+1 px)
+                               // beside the trunk's column; farther, the run is another crown
 };
 
 // A trunk-sized object of the mesh: where it stands and how high the lidar saw it.
@@ -150,7 +150,7 @@ const char* verdictName(CrownVerdict verdict);
 // A trunk's record over the run: where it stands, frames per outcome (saturating at 65535) and the
 // verdict on its samples.
 struct CrownRecord {
-  std::uint32_t key = 0;  // the trunk's lowest vertex id
+  std::uint32_t key = 0;                             // the trunk's lowest vertex id
   Eigen::Vector2f centre = Eigen::Vector2f::Zero();  // [m] where it stood when last seen
   std::array<std::uint16_t, kCrownOutcomes> outcomes{};
   CrownVerdict verdict = CrownVerdict::NotApplied;
@@ -198,7 +198,7 @@ class CrownSampler {
     Eigen::Vector2f trunk;   // [m] where the trunk stood (x, y)
   };
   std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id
-  std::unordered_map<std::uint32_t, CrownRecord> records_;           // by the same key
+  std::unordered_map<std::uint32_t, CrownRecord> records_;          // by the same key
 };
 
 }  // namespace terrain

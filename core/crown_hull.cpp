@@ -12,7 +12,7 @@ namespace terrain {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kAzimuthBins = 720;  // horizon bins around the camera
+constexpr int kAzimuthBins = 720;      // horizon bins around the camera
 constexpr double kHorizonReuse = 1.0;  // [m] cameras this close share a horizon
 
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a - 1) / b) - 1; }
@@ -29,13 +29,16 @@ bool CrownHull::crown(const Votes& v, const CrownHullConfig& cfg) const {
 
 std::size_t CrownHull::crownVoxels(const CrownHullConfig& cfg) const {
   std::size_t n = 0;
-  for (const Column& c : columns_) n += static_cast<std::size_t>(std::count_if(c.layers.begin(), c.layers.end(), [&](const Votes& v) { return crown(v, cfg); }));
+  for (const Column& c : columns_)
+    n += static_cast<std::size_t>(
+        std::count_if(c.layers.begin(), c.layers.end(), [&](const Votes& v) { return crown(v, cfg); }));
   return n;
 }
 
-std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& k,
-                             const Pose& world_from_camera, const SkylineOwners& owners, const CrownHullConfig& cfg,
-                             const CrownConfig& crown_cfg, const BoundaryEstimationConfig& sky_cfg) {
+std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb,
+                             const CameraIntrinsics& k, const Pose& world_from_camera, const SkylineOwners& owners,
+                             const CrownHullConfig& cfg, const CrownConfig& crown_cfg,
+                             const BoundaryEstimationConfig& sky_cfg) {
   if (!cfg.enabled || rgb.empty() || rgb.type() != CV_8UC3 || mesh.vertices().empty()) return 0;
   const Point3 origin = world_from_camera.translation();
   const Eigen::Vector2d here = origin.head<2>();
@@ -83,7 +86,8 @@ std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const
     const Eigen::Vector2d from = horizon_origin_.head<2>();
     double best = -std::numeric_limits<double>::infinity();
     // finer near the camera, where a bump rises steeply
-    for (double d = vs; d <= cfg.horizon_distance; d += d < 20 ? std::max(vs, 0.5 * cfg.cell) : std::max(vs, cfg.cell)) {
+    for (double d = vs; d <= cfg.horizon_distance;
+         d += d < 20 ? std::max(vs, 0.5 * cfg.cell) : std::max(vs, cfg.cell)) {
       const Eigen::Vector2d p = from + d * dir;
       const std::int64_t j = mesh.find(CellIndex(cellOf(p.x(), vs), cellOf(p.y(), vs)));
       if (j < 0 || map.voxels()[vertices[j].top_voxel].label != VoxelLabel::Ground) continue;
@@ -143,7 +147,8 @@ std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const
               votes.first = static_cast<std::int16_t>(bearing);
             } else {
               // the offset from the first bearing, wrapped to (-pi, pi]
-              const auto d = static_cast<std::int16_t>(static_cast<std::uint16_t>(bearing - static_cast<std::uint16_t>(votes.first)));
+              const auto d = static_cast<std::int16_t>(
+                  static_cast<std::uint16_t>(bearing - static_cast<std::uint16_t>(votes.first)));
               votes.lo = std::min(votes.lo, d), votes.hi = std::max(votes.hi, d);
             }
             countUp(votes.foliage);
@@ -158,7 +163,8 @@ std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const
   return voted;
 }
 
-int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConfig& cfg, const CrownConfig& crown_cfg) const {
+int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConfig& cfg,
+                     const CrownConfig& crown_cfg) const {
   if (!cfg.enabled || columns_.empty() || mesh.vertices().empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   auto& vertices = mesh.vertices();
@@ -196,7 +202,7 @@ int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConf
     const int tx = cellOf(t.centre.x(), cfg.cell), ty = cellOf(t.centre.y(), cfg.cell);
     // the crown voxels reached from the trunk, flooded from those over its cells up to the gap
     std::unordered_map<std::int64_t, float> top;  // per column reached: its highest crown voxel's top [m]
-    std::unordered_set<std::int64_t> seen;          // voxels reached (column key, layer)
+    std::unordered_set<std::int64_t> seen;        // voxels reached (column key, layer)
     std::deque<std::pair<std::uint32_t, int>> queue;
     const auto voxelKey = [](std::uint32_t c, int j) { return (static_cast<std::int64_t>(c) << 16) | j; };
     const auto visit = [&](std::uint32_t c, int j) {
@@ -205,7 +211,8 @@ int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConf
       if (!seen.insert(voxelKey(c, j)).second) return;
       queue.emplace_back(c, j);
     };
-    const int tr = std::max(1, static_cast<int>(std::ceil(0.5 * ((t.hi - t.lo).array() + 1).maxCoeff() * vs / cfg.cell)));
+    const int tr =
+        std::max(1, static_cast<int>(std::ceil(0.5 * ((t.hi - t.lo).array() + 1).maxCoeff() * vs / cfg.cell)));
     for (int dy = -tr; dy <= tr; ++dy) {
       for (int dx = -tr; dx <= tr; ++dx) {
         const auto it = index_.find(key(tx + dx, ty + dy));
@@ -240,9 +247,12 @@ int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConf
     // them; a crown is about as wide every way
     std::array<double, 8> reach{};
     for (const auto& [k, z] : top) {
-      const Eigen::Vector2d d = Eigen::Vector2d(((k >> 32) + 0.5) * cfg.cell, (static_cast<std::int32_t>(k & 0xffffffff) + 0.5) * cfg.cell) - t.centre;
+      const Eigen::Vector2d d =
+          Eigen::Vector2d(((k >> 32) + 0.5) * cfg.cell, (static_cast<std::int32_t>(k & 0xffffffff) + 0.5) * cfg.cell) -
+          t.centre;
       const int sector = std::min(7, static_cast<int>((std::atan2(d.y(), d.x()) + kPi) / (2 * kPi) * 8));
-      reach[static_cast<std::size_t>(sector)] = std::max(reach[static_cast<std::size_t>(sector)], d.norm() + 0.5 * cfg.cell);
+      reach[static_cast<std::size_t>(sector)] =
+          std::max(reach[static_cast<std::size_t>(sector)], d.norm() + 0.5 * cfg.cell);
     }
     std::nth_element(reach.begin(), reach.begin() + 3, reach.end());
     const double radius = reach[3];

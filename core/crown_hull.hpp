@@ -38,10 +38,10 @@ namespace terrain {
 // rose 645 -> 1,396 a run: from a short drive the foliage cones stay long along their rays.
 struct CrownHullConfig {
   bool enabled = false;
-  double cell = 0.5;         // [m] column width of the hull's voxels
-  double layer = 0.5;        // [m] their height
-  double max_height = 30.0;  // [m] the hull reaches this far above the ground around a trunk
-  double max_radius = 8.0;   // [m] horizontally from a trunk: wider crowns are cut off
+  double cell = 0.5;           // [m] column width of the hull's voxels
+  double layer = 0.5;          // [m] their height
+  double max_height = 30.0;    // [m] the hull reaches this far above the ground around a trunk
+  double max_radius = 8.0;     // [m] horizontally from a trunk: wider crowns are cut off
   double max_distance = 40.0;  // [m] horizontally from the camera: farther voxels take no vote
   int min_views = 3;           // foliage votes a crown voxel needs
   // [rad] the bearings (seen from the voxel) of the cameras that saw foliage there must spread this
@@ -63,9 +63,10 @@ class CrownHull {
   // objects gain columns around them; every column within max_distance votes. Sky and foliage as
   // crown completion judges them (estimation's sky test, crown.foliage_margin). Returns the voxels
   // that took a vote.
-  std::size_t carve(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb, const CameraIntrinsics& intrinsics,
-                    const Pose& world_from_camera, const SkylineOwners& owners, const CrownHullConfig& config,
-                    const CrownConfig& crown, const BoundaryEstimationConfig& estimation);
+  std::size_t carve(const TerrainMesh& mesh, const VoxelMap& map, const cv::Mat& rgb,
+                    const CameraIntrinsics& intrinsics, const Pose& world_from_camera, const SkylineOwners& owners,
+                    const CrownHullConfig& config, const CrownConfig& crown,
+                    const BoundaryEstimationConfig& estimation);
 
   // At the end of the run: raises the ground vertices (and the trunk's own) under each trunk's
   // crown voxels (MeshVertex::spread) where the crown is higher than they stand. Returns the number
@@ -84,15 +85,15 @@ class CrownHull {
     std::int16_t first = 0, lo = 0, hi = 0;
   };
   struct Column {
-    int x = 0, y = 0;    // the column's cell
-    float bottom = 0;    // [m] height of its lowest layer's floor
+    int x = 0, y = 0;  // the column's cell
+    float bottom = 0;  // [m] height of its lowest layer's floor
     std::vector<Votes> layers;
   };
   static std::int64_t key(int x, int y) { return (static_cast<std::int64_t>(x) << 32) ^ static_cast<std::uint32_t>(y); }
   static constexpr int kTile = 16;  // columns per tile side, for finding those near a camera
   bool crown(const Votes& v, const CrownHullConfig& config) const;
 
-  std::unordered_map<std::int64_t, std::uint32_t> index_;           // column by cell key
+  std::unordered_map<std::int64_t, std::uint32_t> index_;  // column by cell key
   std::vector<Column> columns_;
   std::unordered_map<std::int64_t, std::vector<std::uint32_t>> tiles_;  // columns by tile key
   std::unordered_set<std::int64_t> seeded_;  // the hull cells of trunks already given columns

@@ -44,15 +44,17 @@ Eigen::Vector2d centreOf(const CellIndex& c, double cell) { return {(c.x() + 0.5
 template <typename F>
 void forCellsAround(const Rectangle& r, double cell, F&& f) {
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (const auto& c : r.corners()) x0 = std::min(x0, c.x()), x1 = std::max(x1, c.x()), y0 = std::min(y0, c.y()), y1 = std::max(y1, c.y());
+  for (const auto& c : r.corners())
+    x0 = std::min(x0, c.x()), x1 = std::max(x1, c.x()), y0 = std::min(y0, c.y()), y1 = std::max(y1, c.y());
   for (int cy = static_cast<int>(std::floor(y0 / cell)); cy <= static_cast<int>(std::floor(y1 / cell)); ++cy) {
-    for (int cx = static_cast<int>(std::floor(x0 / cell)); cx <= static_cast<int>(std::floor(x1 / cell)); ++cx) f(CellIndex(cx, cy));
+    for (int cx = static_cast<int>(std::floor(x0 / cell)); cx <= static_cast<int>(std::floor(x1 / cell)); ++cx)
+      f(CellIndex(cx, cy));
   }
 }
 
 // share of one side of the rectangle (from p to q) that has a cell of `object` within `tolerance`
-double sideSupport(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const TerrainMesh& mesh, const MeshObjects& objects,
-                   std::int32_t object, double cell, double tolerance) {
+double sideSupport(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const TerrainMesh& mesh,
+                   const MeshObjects& objects, std::int32_t object, double cell, double tolerance) {
   const int samples = std::max(2, static_cast<int>(std::ceil((q - p).norm() / cell)) + 1);
   const int reach = static_cast<int>(std::ceil(tolerance / cell));
   int supported = 0;
@@ -84,7 +86,8 @@ Rectangle outlineRectangle(const std::vector<Eigen::Vector2d>& points, double ce
   const Eigen::Vector2d ref = points.front();
   std::vector<cv::Point2f> pts, hull;
   pts.reserve(points.size());
-  for (const auto& p : points) pts.emplace_back(static_cast<float>(p.x() - ref.x()), static_cast<float>(p.y() - ref.y()));
+  for (const auto& p : points)
+    pts.emplace_back(static_cast<float>(p.x() - ref.x()), static_cast<float>(p.y() - ref.y()));
   cv::convexHull(pts, hull);
   std::vector<double> angles{0.0};
   for (std::size_t i = 0; i < hull.size(); ++i) {
@@ -147,9 +150,11 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
     // walls along two adjacent sides: a corner was seen
     const auto c = r.corners();
     std::array<double, 4> support{};
-    for (int s = 0; s < 4; ++s) support[s] = sideSupport(c[s], c[(s + 1) % 4], mesh, objects, o, cell, cfg.wall_tolerance);
+    for (int s = 0; s < 4; ++s)
+      support[s] = sideSupport(c[s], c[(s + 1) % 4], mesh, objects, o, cell, cfg.wall_tolerance);
     bool corner = false;
-    for (int s = 0; s < 4; ++s) corner |= support[s] >= cfg.min_side_support && support[(s + 1) % 4] >= cfg.min_side_support;
+    for (int s = 0; s < 4; ++s)
+      corner |= support[s] >= cfg.min_side_support && support[(s + 1) % 4] >= cfg.min_side_support;
     if (!corner) continue;
     // nothing sensed inside: the lidar cannot see into a closed building
     std::size_t inside = 0, sensed = 0;
@@ -172,7 +177,8 @@ std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMa
   return out;
 }
 
-int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints, const FootprintConfig& cfg) {
+int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints,
+              const FootprintConfig& cfg) {
   if (footprints.empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   std::vector<const Footprint*> of_object(objects.count, nullptr);

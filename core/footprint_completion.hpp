@@ -19,14 +19,14 @@ namespace terrain {
 
 struct FootprintConfig {
   bool enabled = true;
-  double min_side = 2.0;           // [m] a footprint narrower than this is not completed
+  double min_side = 2.0;  // [m] a footprint narrower than this is not completed
   // [m] an object's cell this close to the rectangle's outline is on it. Walls seen over a long drive
   // thicken (a heading error of a few tenths of a degree shifts a wall 20 m away by 0.1 m): 1000
   // frames of urban seed 1 completed 1 footprint at 0.5 m, 4 at 1.0 m and 8 at 1.5 m; on 60 frames
   // (urban 1-3, flat, mixed, forest, slope, rough seed 1) 1.0 m completed 3 more on mixed (roof
   // error 1.9 -> 1.0 m) and changed nothing else, while 1.5 m filled 542 cells of terrain on slope.
   double wall_tolerance = 1.0;
-  double min_wall_share = 0.95;    // share of the object's cells that must lie on the outline
+  double min_wall_share = 0.95;  // share of the object's cells that must lie on the outline
   // [m] for min_wall_share, an object's cells this close to the outline are on it: wider than
   // wall_tolerance, which also bounds the rectangle's inside and the sides' support. Over 1000
   // frames of urban seed 1 the walls of five buildings thickened to 1.5 m, 9-12 % of their cells
@@ -54,8 +54,10 @@ struct Footprint {
 std::vector<Footprint> completeFootprints(const TerrainMesh& mesh, const VoxelMap& map, const FootprintConfig& config);
 
 // The walls of completed footprints (their object's vertices on the outline) that have no estimate
-// of their own take the roof height, as spreadEstimates would (MeshVertex::spread). Returns the number of vertices raised so.
-int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints, const FootprintConfig& config);
+// of their own take the roof height, as spreadEstimates would (MeshVertex::spread). Returns the number of vertices
+// raised so.
+int roofWalls(TerrainMesh& mesh, const VoxelMap& map, const std::vector<Footprint>& footprints,
+              const FootprintConfig& config);
 
 // A cell the mesh has no vertex for, inside a footprint, at its roof height [m].
 struct RoofCell {

@@ -53,7 +53,8 @@ int SkyCeiling::carve(const cv::Mat& rgb, const CameraIntrinsics& k, const Pose&
         const int cx = static_cast<int>(std::floor(x / cell_)), cy = static_cast<int>(std::floor(y / cell_));
         const int tx = floorDiv(cx, kTile), ty = floorDiv(cy, kTile);
         if (tx != tile_x || ty != tile_y || !current) current = &tile(tx, ty), tile_x = tx, tile_y = ty;
-        float& c = (*current)[static_cast<std::size_t>(cy - ty * kTile) * kTile + static_cast<std::size_t>(cx - tx * kTile)];
+        float& c =
+            (*current)[static_cast<std::size_t>(cy - ty * kTile) * kTile + static_cast<std::size_t>(cx - tx * kTile)];
         c = std::min(c, bound);
       }
     }
@@ -82,7 +83,8 @@ int SkyCeiling::apply(TerrainMesh& mesh, const VoxelMap& map) const {
 
 std::size_t SkyCeiling::cells() const {
   std::size_t n = 0;
-  for (const auto& [key, t] : tiles_) n += static_cast<std::size_t>(std::count_if(t->begin(), t->end(), [](float c) { return c < kNone; }));
+  for (const auto& [key, t] : tiles_)
+    n += static_cast<std::size_t>(std::count_if(t->begin(), t->end(), [](float c) { return c < kNone; }));
   return n;
 }
 

@@ -70,7 +70,9 @@ class SkyCeiling {
  private:
   static constexpr int kTile = 64;  // cells per tile side
   using Tile = std::vector<float>;  // kTile * kTile ceilings, row-major, +inf where none
-  static std::int64_t tileKey(int tx, int ty) { return (static_cast<std::int64_t>(tx) << 32) ^ static_cast<std::uint32_t>(ty); }
+  static std::int64_t tileKey(int tx, int ty) {
+    return (static_cast<std::int64_t>(tx) << 32) ^ static_cast<std::uint32_t>(ty);
+  }
   Tile& tile(int tx, int ty);
 
   double cell_;

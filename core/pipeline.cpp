@@ -255,13 +255,15 @@ void Pipeline::processReady(const SensorFrame& frame) {
                                     : config_.estimation.max_distance));
     }
     const SkylineOwners* shared = owners ? &*owners : nullptr;
-    const BoundaryEstimationStats stats = estimateBoundaries(mesh_, map_, boundaries.cleaned, k, view.world_from_camera,
-                                                             config_.estimation, rgb, shared);
+    const BoundaryEstimationStats stats =
+        estimateBoundaries(mesh_, map_, boundaries.cleaned, k, view.world_from_camera, config_.estimation, rgb, shared);
     rec.estimated_vertices += stats.estimated;
     projected += stats.projected;
     if (owners) owners->refreshTops(mesh_);
     crowns_.measure(mesh_, map_, rgb, k, view.world_from_camera, config_.crown, config_.estimation, shared);
-    if (owners) hull_.carve(mesh_, map_, rgb, k, view.world_from_camera, *owners, config_.hull, config_.crown, config_.estimation);
+    if (owners)
+      hull_.carve(mesh_, map_, rgb, k, view.world_from_camera, *owners, config_.hull, config_.crown,
+                  config_.estimation);
     ceiling_.carve(rgb, k, view.world_from_camera, config_.free_space, config_.estimation);
     rec.estimation_ms += msSince(t);
   }

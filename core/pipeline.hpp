@@ -1,8 +1,9 @@
 #pragma once
 // The pipeline: pose -> voxel map -> terrain mesh -> ground segmentation -> 2D boundary detection
 // -> 3D boundary estimation (and crown samples), one sensor frame at a time; at finish() the whole-map
-// segmentation, footprint completion, crown completion, the crowns' visual hull and the sky's ceiling. It reads only SensorFrame and the rig
-// calibration; it writes nothing and prints nothing: warnings and timings are kept for the caller.
+// segmentation, footprint completion, crown completion, the crowns' visual hull and the sky's ceiling. It reads only
+// SensorFrame and the rig calibration; it writes nothing and prints nothing: warnings and timings are kept for the
+// caller.
 
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
@@ -42,7 +43,7 @@ struct FrameRecord {
   double pose_ms = 0, voxel_ms = 0, mesh_ms = 0, segmentation_ms = 0, boundary_ms = 0, estimation_ms = 0, total_ms = 0;
   std::size_t points = 0, new_voxels = 0, voxels = 0;
   int estimated_vertices = 0;
-  std::size_t resident_bytes = 0;  // the process's resident memory after the frame (0: unknown)
+  std::size_t resident_bytes = 0;    // the process's resident memory after the frame (0: unknown)
   Point3 position = Point3::Zero();  // [m] estimated vehicle position at `time`, from the final poses (set by finish())
   Rotation attitude = Rotation::Identity();  // estimated world_from_vehicle rotation at `time`, likewise
 };
@@ -102,12 +103,12 @@ class Pipeline {
   PoseEstimator poses_;
   VoxelMap map_;
   TerrainMesh mesh_;
-  SegmentationResult segmentation_;          // of the whole map, from finish()
-  std::vector<Footprint> footprints_;        // from finish()
+  SegmentationResult segmentation_;    // of the whole map, from finish()
+  std::vector<Footprint> footprints_;  // from finish()
   std::vector<RoofCell> roof_cells_;
-  CrownSampler crowns_;                      // crown samples, frame by frame
-  CrownHull hull_;                           // the crowns' visual hull, frame by frame
-  SkyCeiling ceiling_;                       // the sky's rays, frame by frame
+  CrownSampler crowns_;                        // crown samples, frame by frame
+  CrownHull hull_;                             // the crowns' visual hull, frame by frame
+  SkyCeiling ceiling_;                         // the sky's rays, frame by frame
   IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {
     SensorFrame frame;

@@ -16,15 +16,12 @@ inline std::uint64_t mixBits(std::uint64_t x) {
 }
 
 // Hash of several 64-bit keys, for counter-based noise that does not depend on evaluation order.
-inline std::uint64_t hashKeys(std::uint64_t a, std::uint64_t b, std::uint64_t c = 0,
-                              std::uint64_t d = 0) {
+inline std::uint64_t hashKeys(std::uint64_t a, std::uint64_t b, std::uint64_t c = 0, std::uint64_t d = 0) {
   return mixBits(mixBits(mixBits(mixBits(a) ^ b) ^ c) ^ d);
 }
 
 // Uniform double in [0, 1) from the top 53 bits of a 64-bit value.
-inline double unitFromBits(std::uint64_t bits) {
-  return static_cast<double>(bits >> 11) * (1.0 / 9007199254740992.0);
-}
+inline double unitFromBits(std::uint64_t bits) { return static_cast<double>(bits >> 11) * (1.0 / 9007199254740992.0); }
 
 // Sequential generator (SplitMix64 stream) with uniform and normal draws.
 class Random {
@@ -38,9 +35,7 @@ class Random {
   // uniform in [lo, hi)
   double uniform(double lo = 0.0, double hi = 1.0) { return lo + (hi - lo) * unitFromBits(nextBits()); }
   // uniform integer in [lo, hi]
-  int uniformInt(int lo, int hi) {
-    return lo + static_cast<int>(nextBits() % static_cast<std::uint64_t>(hi - lo + 1));
-  }
+  int uniformInt(int lo, int hi) { return lo + static_cast<int>(nextBits() % static_cast<std::uint64_t>(hi - lo + 1)); }
   // standard normal (Box-Muller)
   double normal() { return normalFromBits(nextBits(), nextBits()); }
 

@@ -46,14 +46,14 @@ struct GpsFix {
 
 // One gyro sample: the mean angular rate over (time - period, time], in the vehicle frame.
 struct GyroSample {
-  double time = 0;  // [s] end of the integration interval
+  double time = 0;                 // [s] end of the integration interval
   Vector3 rate = Vector3::Zero();  // [rad/s] vehicle frame
 };
 
 // Pinhole camera model, no distortion.
 struct CameraIntrinsics {
-  int width = 640;   // [px]
-  int height = 480;  // [px]
+  int width = 640;        // [px]
+  int height = 480;       // [px]
   double fx = 0, fy = 0;  // [px] focal lengths
   double cx = 0, cy = 0;  // [px] principal point
 
@@ -79,9 +79,9 @@ struct CameraCalibration {
 struct RigCalibration {
   std::vector<CameraCalibration> cameras;  // any number, none included; images refer to them by index
   Pose vehicle_from_lidar = Pose::Identity();
-  Pose vehicle_from_gps = Pose::Identity();     // GPS antenna phase centre
-  GeodeticOrigin origin;                        // origin of the world ENU frame
-  double gyro_period = 0.005;                   // [s] gyro sample interval
+  Pose vehicle_from_gps = Pose::Identity();  // GPS antenna phase centre
+  GeodeticOrigin origin;                     // origin of the world ENU frame
+  double gyro_period = 0.005;                // [s] gyro sample interval
 };
 
 // The index of the camera named `name` in calibration.cameras, or -1 if there is none.

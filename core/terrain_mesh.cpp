@@ -77,13 +77,20 @@ void TerrainMesh::update(const VoxelMap& map, const std::vector<std::uint32_t>& 
 
 const char* outcomeName(EstimateOutcome outcome) {
   switch (outcome) {
-    case EstimateOutcome::Estimated: return "estimated";
-    case EstimateOutcome::NoTopBoundary: return "no_top_boundary";
-    case EstimateOutcome::CutOff: return "cut_off";
-    case EstimateOutcome::NoSky: return "no_sky";
-    case EstimateOutcome::EndsBelow: return "ends_below";
-    case EstimateOutcome::Implausible: return "implausible";
-    case EstimateOutcome::NotClear: return "not_clear";
+    case EstimateOutcome::Estimated:
+      return "estimated";
+    case EstimateOutcome::NoTopBoundary:
+      return "no_top_boundary";
+    case EstimateOutcome::CutOff:
+      return "cut_off";
+    case EstimateOutcome::NoSky:
+      return "no_sky";
+    case EstimateOutcome::EndsBelow:
+      return "ends_below";
+    case EstimateOutcome::Implausible:
+      return "implausible";
+    case EstimateOutcome::NotClear:
+      return "not_clear";
   }
   return "unknown";
 }

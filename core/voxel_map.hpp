@@ -19,13 +19,13 @@ struct VoxelMapConfig {
 enum class VoxelLabel : std::uint8_t { Unknown = 0, Ground = 1, NonGround = 2 };
 
 struct Voxel {
-  VoxelIndex index;           // grid index (x, y, z)
-  std::uint32_t hits = 0;     // points that fell in it
-  float height = 0;           // [m] mean world z of its points
+  VoxelIndex index;                  // grid index (x, y, z)
+  std::uint32_t hits = 0;            // points that fell in it
+  float height = 0;                  // [m] mean world z of its points
   std::uint8_t r = 0, g = 0, b = 0;  // colour, from the camera
   bool coloured = false;
   VoxelLabel label = VoxelLabel::Unknown;
-  std::uint32_t frame = 0;    // last frame that hit it
+  std::uint32_t frame = 0;  // last frame that hit it
 };
 
 class VoxelMap {

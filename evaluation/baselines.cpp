@@ -1,11 +1,11 @@
 #include "evaluation/baselines.hpp"
 
-#include <opencv2/imgproc.hpp>
-#include <opencv2/photo.hpp>
 #include <pcl/ModelCoefficients.h>
 #include <pcl/point_types.h>
 #include <pcl/segmentation/progressive_morphological_filter.h>
 #include <pcl/segmentation/sac_segmentation.h>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,8 @@ namespace {
 pcl::PointCloud<pcl::PointXYZ>::Ptr toCloud(const std::vector<Point3>& points) {
   auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
   cloud->reserve(points.size());
-  for (const auto& p : points) cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
+  for (const auto& p : points)
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
   return cloud;
 }
 
@@ -107,8 +108,8 @@ void slidingExtreme(const float* in, std::size_t stride, int n, const int* lo, c
 // of the points' distinct x and y coordinates, one sliding window per row and per column. False,
 // with nothing computed, if that grid would exceed `max_cells` (points scattered in x and y, as a
 // raw scan's are).
-bool openOnGrid(const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& z,
-                float resolution, std::size_t max_cells, std::vector<float>& opened) {
+bool openOnGrid(const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& z, float resolution,
+                std::size_t max_cells, std::vector<float>& opened) {
   std::vector<float> xs(x), ys(y);
   std::sort(xs.begin(), xs.end());
   xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
@@ -176,8 +177,8 @@ std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>&
   for (int iteration = 0; windows.empty() || windows.back() < c.max_window_size; ++iteration) {
     // (std::pow of a float and an int is taken in double, as in PCL)
     const float window = static_cast<float>(c.cell_size * (2.0f * std::pow(2.0f, iteration) + 1.0f));
-    float threshold = iteration == 0 ? c.initial_distance
-                                     : c.slope * (window - windows.back()) * c.cell_size + c.initial_distance;
+    float threshold =
+        iteration == 0 ? c.initial_distance : c.slope * (window - windows.back()) * c.cell_size + c.initial_distance;
     threshold = std::min(threshold, c.max_distance);
     windows.push_back(window), thresholds.push_back(threshold);
   }
@@ -209,8 +210,10 @@ cv::Mat inpaintHeights(const cv::Mat& heights, int radius) {
   for (int r = 0; r < heights.rows; ++r) {
     for (int c = 0; c < heights.cols; ++c) {
       const float h = heights.at<float>(r, c);
-      if (std::isfinite(h)) known.at<std::uint8_t>(r, c) = 255;
-      else filled.at<float>(r, c) = 0.0f;
+      if (std::isfinite(h))
+        known.at<std::uint8_t>(r, c) = 255;
+      else
+        filled.at<float>(r, c) = 0.0f;
     }
   }
   // holes near data only: the dilated data mask minus the data

@@ -12,15 +12,18 @@ std::uint64_t VoxelTruth::key(const VoxelIndex& i) { return VoxelMap::pack(i); }
 
 Pose interpolatePose(const std::vector<rig::TimedPose>& poses, double t) {
   if (poses.empty()) return Pose::Identity();
-  auto it = std::lower_bound(poses.begin(), poses.end(), t, [](const rig::TimedPose& p, double v) { return p.time < v; });
+  auto it =
+      std::lower_bound(poses.begin(), poses.end(), t, [](const rig::TimedPose& p, double v) { return p.time < v; });
   if (it == poses.begin()) return it->world_from_vehicle;
   if (it == poses.end()) return poses.back().world_from_vehicle;
   const auto& b = *it;
   const auto& a = *(it - 1);
   const double s = (t - a.time) / (b.time - a.time);
   Pose p = Pose::Identity();
-  p.linear() = Rotation(a.world_from_vehicle.linear()).slerp(s, Rotation(b.world_from_vehicle.linear())).toRotationMatrix();
-  p.translation() = a.world_from_vehicle.translation() + s * (b.world_from_vehicle.translation() - a.world_from_vehicle.translation());
+  p.linear() =
+      Rotation(a.world_from_vehicle.linear()).slerp(s, Rotation(b.world_from_vehicle.linear())).toRotationMatrix();
+  p.translation() = a.world_from_vehicle.translation() +
+                    s * (b.world_from_vehicle.translation() - a.world_from_vehicle.translation());
   return p;
 }
 
@@ -35,8 +38,10 @@ void VoxelTruth::add(const rig::RigFrame& frame, const Pose& vehicle_from_lidar)
                            static_cast<int>(std::floor(w.z() / size_)));
     auto& v = votes_[key(index)];
     const auto cls = frame.truth->points[i].cls;
-    if (cls == 1) ++v.first;           // scenes::GeomClass::Ground
-    else if (cls != 0) ++v.second;
+    if (cls == 1)
+      ++v.first;  // scenes::GeomClass::Ground
+    else if (cls != 0)
+      ++v.second;
   }
 }
 

@@ -35,7 +35,8 @@ std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const V
   std::vector<std::uint32_t> voxel_of;
   map.insert(points, 0, nullptr, &voxel_of);
   const std::vector<std::uint8_t> out = pointLabels(voxel_of, segmentGroundLabels(map, ground).refined);
-  if (milliseconds) *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (milliseconds)
+    *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }
 
@@ -65,7 +66,8 @@ json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::ui
   json j;
   for (const auto& [name, c] : by_class) j["by_class"][name] = {{"points", c.points}, {"labelled_ground", c.ground}};
   for (int k = 0; k < 5; ++k) {
-    j["by_distance"][kBands[k]] = {{"points", bands[k].points}, {"false_ground", bands[k].false_ground},
+    j["by_distance"][kBands[k]] = {{"points", bands[k].points},
+                                   {"false_ground", bands[k].false_ground},
                                    {"missed_ground", bands[k].missed_ground}};
   }
   return j;

@@ -20,10 +20,14 @@ BinaryScores binaryScores(const std::vector<bool>& predicted, const std::vector<
   std::size_t tp = 0, fp = 0, fn = 0, tn = 0;
   for (std::size_t i = 0; i < std::min(predicted.size(), truth.size()); ++i) {
     if (!skip.empty() && skip[i]) continue;
-    if (predicted[i] && truth[i]) ++tp;
-    else if (predicted[i]) ++fp;
-    else if (truth[i]) ++fn;
-    else ++tn;
+    if (predicted[i] && truth[i])
+      ++tp;
+    else if (predicted[i])
+      ++fp;
+    else if (truth[i])
+      ++fn;
+    else
+      ++tn;
   }
   return binaryScores(tp, fp, fn, tn);
 }

@@ -2,8 +2,8 @@
 
 #include "rig/file_io.hpp"
 
-#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -72,7 +72,8 @@ Suite loadSuite(const fs::path& path) {
       if (v["count"]) {
         m.count = v["count"].as<std::string>();
         m.min_count = v["min_count"].as<double>();
-        if (m.count.empty() || m.count == m.name) fail(v, "metric '" + m.name + "': count must name another report field");
+        if (m.count.empty() || m.count == m.name)
+          fail(v, "metric '" + m.name + "': count must name another report field");
         if (!(m.min_count >= 0)) fail(v, "metric '" + m.name + "': min_count must be >= 0");
       }
     } catch (const YAML::Exception& e) {
@@ -109,7 +110,8 @@ Shard parseShard(const std::string& text) {
 Suite shardOf(const Suite& suite, Shard shard) {
   Suite part = suite;
   part.scenarios.clear();
-  for (std::size_t i = static_cast<std::size_t>(shard.k - 1); i < suite.scenarios.size(); i += static_cast<std::size_t>(shard.n)) {
+  for (std::size_t i = static_cast<std::size_t>(shard.k - 1); i < suite.scenarios.size();
+       i += static_cast<std::size_t>(shard.n)) {
     part.scenarios.push_back(suite.scenarios[i]);
   }
   return part;
@@ -133,19 +135,20 @@ Results mergeShards(const Suite& suite, const std::vector<fs::path>& dirs) {
     nlohmann::json shard;
     Results part;
     try {
-      if (!fs::exists(dir / "shard.json")) throw io::InputError((dir / "shard.json").string() + ": missing (not a shard's output)");
+      if (!fs::exists(dir / "shard.json"))
+        throw io::InputError((dir / "shard.json").string() + ": missing (not a shard's output)");
       shard = nlohmann::json::parse(io::readFile(dir / "shard.json"));
       if (!fs::exists(dir / "suite_results.json")) {
-        throw io::InputError((dir / "suite_results.json").string() + ": missing: shard " + std::to_string(shard.value("shard", 0)) +
-                             " did not finish");
+        throw io::InputError((dir / "suite_results.json").string() + ": missing: shard " +
+                             std::to_string(shard.value("shard", 0)) + " did not finish");
       }
       const nlohmann::json r = nlohmann::json::parse(io::readFile(dir / "suite_results.json"));
       for (auto sc = r.begin(); sc != r.end(); ++sc) {
         for (auto m = sc.value().begin(); m != sc.value().end(); ++m) part[sc.key()][m.key()] = m.value().get<double>();
       }
       if (shard.at("suite").get<std::string>() != suite.name) {
-        throw io::InputError((dir / "shard.json").string() + ": a shard of suite '" + shard.at("suite").get<std::string>() +
-                             "', not '" + suite.name + "'");
+        throw io::InputError((dir / "shard.json").string() + ": a shard of suite '" +
+                             shard.at("suite").get<std::string>() + "', not '" + suite.name + "'");
       }
     } catch (const nlohmann::json::exception& e) {
       throw io::InputError(dir.string() + ": not a shard's output (" + e.what() + ")");
@@ -153,22 +156,24 @@ Results mergeShards(const Suite& suite, const std::vector<fs::path>& dirs) {
     const Shard s{shard.value("shard", 0), shard.value("of", 0)};
     if (n == 0) n = s.n;
     if (s.n != n || s.k < 1 || s.k > s.n) {
-      throw io::InputError((dir / "shard.json").string() + ": part " + std::to_string(s.k) + " of " + std::to_string(s.n) +
-                           ", but the other shards split the suite in " + std::to_string(n));
+      throw io::InputError((dir / "shard.json").string() + ": part " + std::to_string(s.k) + " of " +
+                           std::to_string(s.n) + ", but the other shards split the suite in " + std::to_string(n));
     }
     if (const auto it = seen.find(s.k); it != seen.end()) {
-      throw io::InputError(dir.string() + ": shard " + std::to_string(s.k) + "/" + std::to_string(n) + " is given twice (also " +
-                           it->second.string() + ")");
+      throw io::InputError(dir.string() + ": shard " + std::to_string(s.k) + "/" + std::to_string(n) +
+                           " is given twice (also " + it->second.string() + ")");
     }
     seen[s.k] = dir;
     for (const auto& sc : shardOf(suite, s).scenarios) {
       const auto r = part.find(sc.id());
-      if (r == part.end()) throw io::InputError(dir.string() + ": shard " + std::to_string(s.k) + " has no results for " + sc.id());
+      if (r == part.end())
+        throw io::InputError(dir.string() + ": shard " + std::to_string(s.k) + " has no results for " + sc.id());
       all[sc.id()] = r->second;
     }
   }
   for (int k = 1; k <= n; ++k) {
-    if (!seen.count(k)) throw io::InputError("shard " + std::to_string(k) + "/" + std::to_string(n) + " is missing from --merge");
+    if (!seen.count(k))
+      throw io::InputError("shard " + std::to_string(k) + "/" + std::to_string(n) + " is missing from --merge");
   }
   if (dirs.empty()) throw io::InputError("--merge needs the shards' output directories");
   return all;
@@ -179,7 +184,8 @@ void writeBaseline(const fs::path& path, const Suite& suite, const Results& resu
   for (const auto& m : suite.metrics) {
     for (const std::string* field : {&m.name, &m.count}) {
       if (field->empty()) continue;
-      const bool anywhere = std::any_of(results.begin(), results.end(), [&](const auto& r) { return r.second.count(*field) > 0; });
+      const bool anywhere =
+          std::any_of(results.begin(), results.end(), [&](const auto& r) { return r.second.count(*field) > 0; });
       if (!anywhere) {
         throw io::InputError("suite " + suite.name + ": metric '" + *field + "' is in no scenario's report (" +
                              std::to_string(results.size()) + " scenarios); check its name against report.json" +
@@ -238,12 +244,17 @@ RegressionResult compare(const Suite& suite, const Results& baseline, const Resu
 }
 
 void printTable(std::ostream& out, const RegressionResult& r) {
-  out << std::left << std::setw(24) << "scenario" << std::setw(46) << "metric" << std::right << std::setw(11) << "baseline"
-      << std::setw(11) << "value" << std::setw(11) << "tolerance" << "  status\n";
+  out << std::left << std::setw(24) << "scenario" << std::setw(46) << "metric" << std::right << std::setw(11)
+      << "baseline" << std::setw(11) << "value" << std::setw(11) << "tolerance"
+      << "  status\n";
   for (const auto& c : r.rows) {
     out << std::left << std::setw(24) << c.scenario << std::setw(46) << c.metric << std::right << std::fixed
-        << std::setprecision(4) << std::setw(11) << c.baseline << std::setw(11) << c.value << std::setw(11) << c.tolerance
-        << "  " << (c.missing ? "MISSING" : c.regressed ? "REGRESSED" : c.skipped ? "skipped" : "ok");
+        << std::setprecision(4) << std::setw(11) << c.baseline << std::setw(11) << c.value << std::setw(11)
+        << c.tolerance << "  "
+        << (c.missing     ? "MISSING"
+            : c.regressed ? "REGRESSED"
+            : c.skipped   ? "skipped"
+                          : "ok");
     if (c.skipped) out << " (count " << std::setprecision(0) << c.baseline_count << " -> " << c.count << ")";
     out << "\n";
   }
@@ -253,10 +264,11 @@ void printTable(std::ostream& out, const RegressionResult& r) {
 }
 
 std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
-  static const char* methods[] = {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"};
+  static const char* methods[] = {"histogram",  "gmrf_icm",     "gmrf_mincut",
+                                  "fixed_band", "ransac_plane", "morphological_filter"};
   std::ostringstream h;
-  h << std::fixed << std::setprecision(3)
-    << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>suite " << suite.name
+  h << std::fixed << std::setprecision(3) << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>suite "
+    << suite.name
     << "</title><style>body{font-family:sans-serif}table{border-collapse:collapse}td,th{border:1px solid #bbb;"
        "padding:3px 8px;text-align:right}th{background:#eee}</style></head><body><h1>Suite "
     << suite.name << "</h1><h2>Ground segmentation F1 per voxel</h2><table><tr><th>scenario</th>";
@@ -274,14 +286,16 @@ std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
     for (const char* m : methods) h << "<td>" << value(r, std::string("ground_segmentation.") + m + ".f1") << "</td>";
     h << "</tr>";
   }
-  h << "</table><h2>Object heights and boundaries</h2><table><tr><th>scenario</th><th>MAE sensed m</th><th>MAE after m</th>"
+  h << "</table><h2>Object heights and boundaries</h2><table><tr><th>scenario</th><th>MAE sensed m</th><th>MAE after "
+       "m</th>"
        "<th>estimated cells MAE sensed m</th><th>estimated cells MAE after m</th><th>height map MAE inpainting m</th>"
        "<th>boundary coverage sensed</th><th>boundary coverage after</th><th>median ms per frame</th></tr>";
   for (const auto& [scenario, r] : results) {
     h << "<tr><td style=\"text-align:left\">" << scenario << "</td>";
-    for (const char* k : {"height_recovery.before.mae_m", "height_recovery.after.mae_m", "height_recovery.estimated_cells.before.mae_m",
-                          "height_recovery.estimated_cells.after.mae_m", "height_baselines.inpainting.mae_m",
-                          "boundary_coverage_before", "boundary_coverage", "timing.total.median_ms"}) {
+    for (const char* k :
+         {"height_recovery.before.mae_m", "height_recovery.after.mae_m", "height_recovery.estimated_cells.before.mae_m",
+          "height_recovery.estimated_cells.after.mae_m", "height_baselines.inpainting.mae_m",
+          "boundary_coverage_before", "boundary_coverage", "timing.total.median_ms"}) {
       h << "<td>" << value(r, k) << "</td>";
     }
     h << "</tr>";
@@ -297,9 +311,9 @@ std::string junitXml(const Suite& suite, const RegressionResult& r) {
   for (const auto& c : r.rows) {
     x << "  <testcase classname=\"" << c.scenario << "\" name=\"" << c.metric << "\">";
     if (c.regressed) {
-      x << "<failure message=\"" << (c.missing ? "no baseline or value" : "past tolerance") << "\">baseline " << c.baseline
-        << ", value " << c.value << ", tolerance " << c.tolerance << " (" << (c.higher_is_better ? "higher" : "lower")
-        << " is better)</failure>";
+      x << "<failure message=\"" << (c.missing ? "no baseline or value" : "past tolerance") << "\">baseline "
+        << c.baseline << ", value " << c.value << ", tolerance " << c.tolerance << " ("
+        << (c.higher_is_better ? "higher" : "lower") << " is better)</failure>";
     } else if (c.skipped) {
       x << "<skipped message=\"too few to compare: count " << c.baseline_count << " in the baseline, " << c.count
         << " now\"/>";

@@ -19,9 +19,9 @@ struct ScenarioSpec {
 };
 
 struct MetricSpec {
-  std::string name;       // flattened report field, e.g. ground_segmentation.gmrf_icm.f1
+  std::string name;  // flattened report field, e.g. ground_segmentation.gmrf_icm.f1
   bool higher_is_better = true;
-  double tolerance = 0;   // allowed worsening, in the metric's unit
+  double tolerance = 0;  // allowed worsening, in the metric's unit
   // With a count field (another flattened report field, e.g. the cells an error is averaged over),
   // the metric is compared only where that count is at least min_count in both the baseline and the
   // run: an average over a handful of cells moves past any tolerance when one cell comes or goes.

@@ -24,8 +24,14 @@ json errorJson(const ErrorStats& e) {
 }
 
 json binaryJson(const BinaryScores& b) {
-  return {{"precision", b.precision}, {"recall", b.recall}, {"f1", b.f1}, {"iou", b.iou},
-          {"tp", b.tp}, {"fp", b.fp}, {"fn", b.fn}, {"tn", b.tn}};
+  return {{"precision", b.precision},
+          {"recall", b.recall},
+          {"f1", b.f1},
+          {"iou", b.iou},
+          {"tp", b.tp},
+          {"fp", b.fp},
+          {"fn", b.fn},
+          {"tn", b.tn}};
 }
 
 // per voxel and per point (each voxel weighted by the true points in it)
@@ -34,8 +40,10 @@ json segmentationJson(const VoxelMap& map, const std::vector<std::uint8_t>& grou
   std::size_t tp = 0, fp = 0, fn = 0, tn = 0;
   for (std::size_t i = 0; i < map.size() && i < ground.size(); ++i) {
     const auto [g, n] = truth.votes(map.voxels()[i].index);
-    if (ground[i]) tp += g, fp += n;
-    else fn += g, tn += n;
+    if (ground[i])
+      tp += g, fp += n;
+    else
+      fn += g, tn += n;
   }
   json j = binaryJson(voxel.scores);
   j["per_point"] = binaryJson(binaryScores(tp, fp, fn, tn));
@@ -92,7 +100,8 @@ std::size_t keptFrameCount(const RunTruth& truth) {
 }
 
 BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double cell,
-                                  const sim::World& world, const CameraIntrinsics& k, const CameraTruthFrame& f, int tolerance) {
+                                  const sim::World& world, const CameraIntrinsics& k, const CameraTruthFrame& f,
+                                  int tolerance) {
   BoundaryCoverage out;
   const cv::Mat& seg = f.segmentation;
   cv::Mat boundary(seg.size(), CV_8UC1, cv::Scalar(0));
@@ -108,13 +117,15 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
   cv::Mat before(seg.size(), CV_8UC1, cv::Scalar(0)), after = before.clone();
   for (const auto& m : mesh.vertices()) {
     const double x = (m.cell.x() + 0.5) * cell, y = (m.cell.y() + 0.5) * cell;
-    for (auto [height, target] : {std::pair{static_cast<double>(m.sensed_height), &before}, {static_cast<double>(m.height()), &after}}) {
+    for (auto [height, target] :
+         {std::pair{static_cast<double>(m.sensed_height), &before}, {static_cast<double>(m.height()), &after}}) {
       const auto px = project(k, camera_from_world * Point3(x, y, height));
       if (px) target->at<std::uint8_t>(static_cast<int>(px->y()), static_cast<int>(px->x())) = 255;
     }
   }
   for (const auto& r : roof) {
-    const auto px = project(k, camera_from_world * Point3((r.cell.x() + 0.5) * cell, (r.cell.y() + 0.5) * cell, r.height));
+    const auto px =
+        project(k, camera_from_world * Point3((r.cell.x() + 0.5) * cell, (r.cell.y() + 0.5) * cell, r.height));
     if (px) after.at<std::uint8_t>(static_cast<int>(px->y()), static_cast<int>(px->x())) = 255;
   }
   const cv::Mat grow = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * tolerance + 1, 2 * tolerance + 1));
@@ -163,8 +174,7 @@ std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const
             heightSeen(u, v, g) >= o.top_height - std::max(1.0, 0.15 * (o.top_height - o.base_height)))
           tops.insert(o.id);
         // a bottom boundary pixel looking at the object's lower part
-        if (bottom_edge && !bases.count(o.id) && heightSeen(u, v, g) <= o.base_height + kLowerPart)
-          bases.insert(o.id);
+        if (bottom_edge && !bases.count(o.id) && heightSeen(u, v, g) <= o.base_height + kLowerPart) bases.insert(o.id);
       }
     }
   }
@@ -196,17 +206,15 @@ json poseJson(const Pipeline& pipeline, const RunTruth& truth) {
     const PoseError e = poseError(estimated, c.world_from_camera * camera_to_vehicle);
     horizontal.push_back(e.horizontal), vertical.push_back(e.vertical);
     constexpr double kToDegrees = 180 / M_PI;
-    heading.push_back(e.heading * kToDegrees), pitch.push_back(e.pitch * kToDegrees), roll.push_back(e.roll * kToDegrees);
+    heading.push_back(e.heading * kToDegrees), pitch.push_back(e.pitch * kToDegrees),
+        roll.push_back(e.roll * kToDegrees);
   }
   const auto stats = [](const std::vector<double>& v) {
     return json{{"median", percentiles(v).median}, {"max", v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())}};
   };
-  return {{"frames", horizontal.size()},
-          {"horizontal_error_m", stats(horizontal)},
-          {"vertical_error_m", stats(vertical)},
-          {"heading_error_deg", stats(heading)},
-          {"pitch_error_deg", stats(pitch)},
-          {"roll_error_deg", stats(roll)}};
+  return {{"frames", horizontal.size()},         {"horizontal_error_m", stats(horizontal)},
+          {"vertical_error_m", stats(vertical)}, {"heading_error_deg", stats(heading)},
+          {"pitch_error_deg", stats(pitch)},     {"roll_error_deg", stats(roll)}};
 }
 
 json timingJson(const std::vector<FrameRecord>& records) {
@@ -244,8 +252,10 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   if (const std::vector<std::string> loose = world.unclassifiedGeoms(); !loose.empty()) {
     std::string names;
     for (std::size_t i = 0; i < std::min<std::size_t>(5, loose.size()); ++i) names += (i ? ", " : "") + loose[i];
-    truth_warnings.push_back(std::to_string(loose.size()) + " scene geom(s) belong to no object of the truth sidecar and are not the terrain (" +
-                             names + (loose.size() > 5 ? ", ..." : "") + "): their points and cells are scored as neither ground nor object");
+    truth_warnings.push_back(std::to_string(loose.size()) +
+                             " scene geom(s) belong to no object of the truth sidecar and are not the terrain (" +
+                             names + (loose.size() > 5 ? ", ..." : "") +
+                             "): their points and cells are scored as neither ground nor object");
   }
 
   // ground segmentation: histogram, both GMRF solvers, the baselines
@@ -282,25 +292,29 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["after"] = errorJson(h.after);
   hr["estimated_cells"] = {{"before", errorJson(h.seen_before)}, {"after", errorJson(h.seen_after)}};
   if (h.after.count == 0) {
-    truth_warnings.push_back(world.truth().objects.empty()
-                                 ? "the truth sidecar lists no objects: object heights are not scored (0 cells)"
-                                 : "no cell of the map lies under an object of the truth: object heights are not scored (0 cells)");
+    truth_warnings.push_back(
+        world.truth().objects.empty()
+            ? "the truth sidecar lists no objects: object heights are not scored (0 cells)"
+            : "no cell of the map lies under an object of the truth: object heights are not scored (0 cells)");
   }
   hr["raised_terrain_cells"] = h.raised_terrain_cells;
-  hr["raised_terrain_cells_by_step"] = {{"crown_completion", h.raised_terrain_ground_cells},
-                                        {"boundary_estimation", h.raised_terrain_cells - h.raised_terrain_ground_cells}};
+  hr["raised_terrain_cells_by_step"] = {
+      {"crown_completion", h.raised_terrain_ground_cells},
+      {"boundary_estimation", h.raised_terrain_cells - h.raised_terrain_ground_cells}};
   hr["raised_edge_cells"] = h.raised_edge_cells;
   for (const auto& [view, e] : h.by_view) {
-    hr["by_camera_view"][view] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)},
-                                  {"raised_cells", h.raised_by_view.at(view)}};
+    hr["by_camera_view"][view] = {
+        {"before", errorJson(e.first)}, {"after", errorJson(e.second)}, {"raised_cells", h.raised_by_view.at(view)}};
   }
-  for (const auto& [band, e] : h.by_band) hr["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  for (const auto& [band, e] : h.by_band)
+    hr["by_distance"][band] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   for (const auto& [id, e] : h.by_object) {
     hr["by_object"][id] = {{"before", errorJson(e.first)},
                            {"after", errorJson(e.second)},
                            {"cells_in_camera_view", h.in_view_by_object.at(id)}};
   }
-  for (const auto& [kind, e] : h.by_kind) hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
+  for (const auto& [kind, e] : h.by_kind)
+    hr["by_kind"][kind] = {{"before", errorJson(e.first)}, {"after", errorJson(e.second)}};
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
   // the tops of the objects whose top the camera saw: do they stand at their real height?
   {
@@ -356,41 +370,54 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       if (it->second.with_lower_part > 0) s.with_lower_part.add(eb, ea, tol);
       s.e_before.push_back(eb), s.e_after.push_back(ea);
       json outcomes = json::object();
-      for (std::size_t k = 0; k < kEstimateOutcomes; ++k) outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = t.outcomes[k];
-      list[id] = {{"class", t.building ? "building" : "tree"}, {"true_top_m", t.top}, {"sensed_top_m", t.sensed},
-                  {"recovered_top_m", t.recovered}, {"error_m", ea}, {"tolerance_m", tol},
-                  {"frames_top_seen", it->second.top}, {"frames_lower_part_seen_with_top", it->second.with_lower_part},
-                  {"cells", t.cells}, {"estimation_outcomes", outcomes}};
+      for (std::size_t k = 0; k < kEstimateOutcomes; ++k)
+        outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = t.outcomes[k];
+      list[id] = {{"class", t.building ? "building" : "tree"},
+                  {"true_top_m", t.top},
+                  {"sensed_top_m", t.sensed},
+                  {"recovered_top_m", t.recovered},
+                  {"error_m", ea},
+                  {"tolerance_m", tol},
+                  {"frames_top_seen", it->second.top},
+                  {"frames_lower_part_seen_with_top", it->second.with_lower_part},
+                  {"cells", t.cells},
+                  {"estimation_outcomes", outcomes}};
       if (!t.building) {
         json& crown = list[id]["crown"];
         if (const auto tc = crown_of.find(id); tc != crown_of.end()) {
           json counts = json::object();
           for (std::size_t k = 0; k < kCrownOutcomes; ++k)
             counts[outcomeName(static_cast<CrownOutcome>(k))] = tc->second.outcomes[k];
-          crown = {{"trunk_records", tc->second.records}, {"outcomes", counts}, {"verdict", verdictName(tc->second.verdict)}};
+          crown = {{"trunk_records", tc->second.records},
+                   {"outcomes", counts},
+                   {"verdict", verdictName(tc->second.verdict)}};
         }
       }
     }
     for (const auto& [kind, s] : sums) {
       const Count& a = s.all;
       const Count& w = s.with_lower_part;
-      tops[kind] = {{"top_seen", a.seen}, {"at_height_before", a.before}, {"at_height_after", a.after},
-                    {"too_high_before", a.high_before}, {"too_high_after", a.high_after},
-                    {"before", errorJson(errorStats(s.e_before))}, {"after", errorJson(errorStats(s.e_after))},
+      tops[kind] = {{"top_seen", a.seen},
+                    {"at_height_before", a.before},
+                    {"at_height_after", a.after},
+                    {"too_high_before", a.high_before},
+                    {"too_high_after", a.high_after},
+                    {"before", errorJson(errorStats(s.e_before))},
+                    {"after", errorJson(errorStats(s.e_after))},
                     {"lower_part_seen_with_top",
-                     {{"objects", w.seen}, {"at_height_before", w.before}, {"at_height_after", w.after},
-                      {"too_high_before", w.high_before}, {"too_high_after", w.high_after}}}};
+                     {{"objects", w.seen},
+                      {"at_height_before", w.before},
+                      {"at_height_after", w.after},
+                      {"too_high_before", w.high_before},
+                      {"too_high_after", w.high_after}}}};
     }
     tops["frames"] = keptFrameCount(truth);
   }
   // roofs of completed building footprints
   const RoofScores roof = scoreRoofCells(pipeline.roofCells(), map.voxelSize(), world);
-  hr["footprints"] = {{"completed", pipeline.footprints().size()},
-                      {"roof_cells", roof.cells},
-                      {"object_cells", roof.object_cells},
-                      {"building_cells", roof.building_cells},
-                      {"wrongly_filled_cells", roof.wrongly_filled},
-                      {"on_objects", errorJson(roof.on_objects)}};
+  hr["footprints"] = {{"completed", pipeline.footprints().size()},   {"roof_cells", roof.cells},
+                      {"object_cells", roof.object_cells},           {"building_cells", roof.building_cells},
+                      {"wrongly_filled_cells", roof.wrongly_filled}, {"on_objects", errorJson(roof.on_objects)}};
   // ground vertices raised under tree crowns (crown completion), and vertices whose estimates the
   // parallax test held back (an edge behind them formed their skyline)
   std::size_t under_crowns = 0, parallax = 0;
@@ -411,7 +438,9 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   for (const auto& f : pipeline.footprints()) {
     json corners = json::array();
     for (const auto& c : f.corners) corners.push_back({c.x(), c.y()});
-    json entry = {{"corners_m", corners}, {"roof_height_m", f.roof_height}, {"wall_vertices", f.wall_vertices},
+    json entry = {{"corners_m", corners},
+                  {"roof_height_m", f.roof_height},
+                  {"wall_vertices", f.wall_vertices},
                   {"raised_vertices", f.raised_vertices}};
     // the true building under it
     const FootprintMatch match = matchFootprint(f, world, map.voxelSize());
@@ -447,7 +476,8 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
       // the recovered map also has the roofs of completed footprints (inside the mesh's extent)
       for (const auto& rc : pipeline.roofCells()) {
         const int row = rc.cell.y() - y0, col = rc.cell.x() - x0;
-        if (row >= 0 && col >= 0 && row < recovered.rows && col < recovered.cols) recovered.at<float>(row, col) = rc.height;
+        if (row >= 0 && col >= 0 && row < recovered.rows && col < recovered.cols)
+          recovered.at<float>(row, col) = rc.height;
       }
       const cv::Mat inpainted = inpaintHeights(sensed, 10);
       // object cells: the cells of object footprints inside the mapped area
@@ -464,7 +494,8 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
           if (!scenes::isObjectClass(world.geomClass(geom))) continue;
           ++cells;
           if (std::isfinite(sensed.at<float>(r0, c0))) ++c_sensed, e_sensed.push_back(sensed.at<float>(r0, c0) - top);
-          if (std::isfinite(recovered.at<float>(r0, c0))) ++c_recovered, e_recovered.push_back(recovered.at<float>(r0, c0) - top);
+          if (std::isfinite(recovered.at<float>(r0, c0)))
+            ++c_recovered, e_recovered.push_back(recovered.at<float>(r0, c0) - top);
           if (std::isfinite(si)) ++c_inpaint, e_inpaint.push_back(si - top);
         }
       }
@@ -492,8 +523,11 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   for (const auto& c : truth.cameras) {
     const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world,
                                                 intrinsicsOf(pipeline.calibration(), c), c, 3);
-    frames.push_back({{"frame", c.frame}, {"camera", cameras.at(c.camera).name}, {"before", b.before},
-                      {"after", b.after}, {"boundary_pixels", b.boundary_pixels}});
+    frames.push_back({{"frame", c.frame},
+                      {"camera", cameras.at(c.camera).name},
+                      {"before", b.before},
+                      {"after", b.after},
+                      {"boundary_pixels", b.boundary_pixels}});
     for (Coverage* k : {&all, &per_camera[c.camera]}) {
       k->before += b.before * b.boundary_pixels;
       k->after += b.after * b.boundary_pixels;
@@ -522,7 +556,8 @@ std::map<std::string, double> flattenMetrics(const json& report) {
   std::map<std::string, double> out;
   std::function<void(const json&, const std::string&)> walk = [&](const json& j, const std::string& prefix) {
     if (j.is_object()) {
-      for (auto it = j.begin(); it != j.end(); ++it) walk(it.value(), prefix.empty() ? it.key() : prefix + "." + it.key());
+      for (auto it = j.begin(); it != j.end(); ++it)
+        walk(it.value(), prefix.empty() ? it.key() : prefix + "." + it.key());
     } else if (j.is_number()) {
       out[prefix] = j.get<double>();
     }

@@ -52,8 +52,8 @@ struct BoundaryCoverage {
 // lands within `tolerance` pixels of it. Computed for the sensed heights (before) and the
 // recovered heights with the roof cells of completed footprints (after).
 BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
-                                  const sim::World& world, const CameraIntrinsics& intrinsics, const CameraTruthFrame& frame,
-                                  int tolerance);
+                                  const sim::World& world, const CameraIntrinsics& intrinsics,
+                                  const CameraTruthFrame& frame, int tolerance);
 
 // The intrinsics of the camera that took a kept image (frame.camera into calibration.cameras).
 const CameraIntrinsics& intrinsicsOf(const RigCalibration& calibration, const CameraTruthFrame& frame);

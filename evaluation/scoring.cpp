@@ -17,10 +17,14 @@ SegmentationScores scoreVoxels(const VoxelMap& map, const std::vector<std::uint8
       continue;
     }
     const bool p = ground[i] != 0, g = t == TruthLabel::Ground;
-    if (p && g) ++tp;
-    else if (p) ++fp;
-    else if (g) ++fn;
-    else ++tn;
+    if (p && g)
+      ++tp;
+    else if (p)
+      ++fp;
+    else if (g)
+      ++fn;
+    else
+      ++tn;
   }
   out.scores = binaryScores(tp, fp, fn, tn);
   return out;
@@ -75,7 +79,8 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
     if (!std::isfinite(t.top)) continue;
     if (!t.object) {
       if (v.raised() && v.height() > t.top + 1.0) {
-        if (objectNearby(world, x, y, 0.5)) ++out.raised_edge_cells;
+        if (objectNearby(world, x, y, 0.5))
+          ++out.raised_edge_cells;
         else {
           ++out.raised_terrain_cells;
           out.raised_terrain_ground_cells += map.voxels()[v.top_voxel].label == VoxelLabel::Ground;
@@ -147,7 +152,8 @@ bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
   for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
     const Eigen::Vector2d& a = poly[i];
     const Eigen::Vector2d& b = poly[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) in = !in;
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y()))
+      in = !in;
   }
   return in;
 }
@@ -175,7 +181,8 @@ FootprintMatch matchFootprint(const Footprint& f, const sim::World& world, doubl
     }
   }
   if (votes.empty()) return out;
-  const auto best = std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto best =
+      std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
   const scenes::ObjectTruth* truth = nullptr;
   for (const auto& o : world.truth().objects) {
     if (o.id == best->first) truth = &o;

@@ -27,9 +27,9 @@ SegmentationScores scoreVoxels(const VoxelMap& map, const std::vector<std::uint8
 // top is the object (mesh vertices, and for the recovered top also the roof cells of completed
 // footprints), so that a few stray cells neither make nor break it.
 struct ObjectTop {
-  bool building = false;  // else a tree
-  double base = 0, top = 0;  // [m] true world z of the object's base and highest point
-  double sensed = std::numeric_limits<double>::quiet_NaN();     // [m] sensed heights only
+  bool building = false;                                     // else a tree
+  double base = 0, top = 0;                                  // [m] true world z of the object's base and highest point
+  double sensed = std::numeric_limits<double>::quiet_NaN();  // [m] sensed heights only
   double recovered = std::numeric_limits<double>::quiet_NaN();  // [m] after recovery
   std::size_t cells = 0;  // mesh vertices and roof cells whose true top is the object
   // boundary estimation's outcomes over the object's mesh vertices: vertex-frames per outcome
@@ -45,7 +45,7 @@ struct HeightScores {
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_band;    // "0-30", "30-60", "60-100" [m]
   std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_object;  // object id
   std::map<std::string, std::size_t> in_view_by_object;  // object id -> its cells whose sensed top the camera saw
-  std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_kind;    // "building", "tree" (trunk or crown on top)
+  std::map<std::string, std::pair<ErrorStats, ErrorStats>> by_kind;  // "building", "tree" (trunk or crown on top)
   // object cells whose sensed top is the terrain under the object (ground under a tree crown):
   // their vertex is ground, so boundary estimation, which raises non-ground vertices, cannot reach them
   std::size_t sensed_as_terrain = 0;
@@ -74,11 +74,11 @@ HeightScores scoreHeights(const TerrainMesh& mesh, const VoxelMap& map, const si
 // Roof cells of completed building footprints (cells the mesh has no vertex for) against the truth:
 // on an object's cell the error of the roof height; elsewhere the cell was filled wrongly.
 struct RoofScores {
-  std::size_t cells = 0;            // roof cells with a known truth
-  std::size_t object_cells = 0;     // of which an object is the true top
-  std::size_t building_cells = 0;   // of which a building
-  std::size_t wrongly_filled = 0;   // of which terrain is the true top
-  ErrorStats on_objects;            // roof height - true top over object_cells [m]
+  std::size_t cells = 0;           // roof cells with a known truth
+  std::size_t object_cells = 0;    // of which an object is the true top
+  std::size_t building_cells = 0;  // of which a building
+  std::size_t wrongly_filled = 0;  // of which terrain is the true top
+  ErrorStats on_objects;           // roof height - true top over object_cells [m]
 };
 RoofScores scoreRoofCells(const std::vector<RoofCell>& roof, double voxel_size, const sim::World& world);
 

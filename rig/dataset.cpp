@@ -63,7 +63,8 @@ void writeImage(const fs::path& path, const cv::Mat& image) {
 
 cv::Mat readImage(const fs::path& path, int flags, int expected_type) {
   const std::string bytes = io::readFile(path);
-  cv::Mat img = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())), flags);
+  cv::Mat img =
+      cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())), flags);
   if (img.empty()) throw io::InputError(path.string() + ": not a readable image");
   if (img.type() != expected_type) throw io::InputError(path.string() + ": unexpected pixel type");
   return img;
@@ -112,7 +113,8 @@ std::vector<std::vector<double>> readStream(const fs::path& path, std::size_t co
     for (double v : rows[i]) {
       if (!std::isfinite(v)) throw io::InputError(where() + "a value is not finite (" + std::to_string(v) + ")");
     }
-    if (i > 0 && rows[i][0] <= rows[i - 1][0]) throw io::InputError(where() + "time does not increase from the row before");
+    if (i > 0 && rows[i][0] <= rows[i - 1][0])
+      throw io::InputError(where() + "time does not increase from the row before");
     const std::string problem = check(rows[i]);
     if (!problem.empty()) throw io::InputError(where() + problem);
   }
@@ -216,7 +218,8 @@ RigCalibration calibrationFromJson(const std::string& text, const std::string& o
     c.vehicle_from_lidar = poseFromJson(j.at("vehicle_from_lidar"), origin, "vehicle_from_lidar");
     c.vehicle_from_gps = poseFromJson(j.at("vehicle_from_gps"), origin, "vehicle_from_gps");
     const json& o = j.at("geodetic_origin");
-    c.origin = {o.at("latitude_deg").get<double>(), o.at("longitude_deg").get<double>(), o.at("altitude_m").get<double>()};
+    c.origin = {o.at("latitude_deg").get<double>(), o.at("longitude_deg").get<double>(),
+                o.at("altitude_m").get<double>()};
     c.gyro_period = j.at("gyro_period_s").get<double>();
   } catch (const json::exception& e) {
     throw io::InputError(origin + ": " + e.what());
@@ -284,10 +287,11 @@ void DatasetWriter::write(const RigFrame& frame) {
           << (s.images.empty() ? std::string("nan") : g17(s.images.front().time)) << ',' << s.sweep.points.size()
           << '\n';
   for (const auto& f : s.gps) {
-    gps_ << g17(f.time) << ',' << g17(f.latitude_deg) << ',' << g17(f.longitude_deg) << ',' << g17(f.altitude_m)
-         << ',' << g17(f.sigma_m) << '\n';
+    gps_ << g17(f.time) << ',' << g17(f.latitude_deg) << ',' << g17(f.longitude_deg) << ',' << g17(f.altitude_m) << ','
+         << g17(f.sigma_m) << '\n';
   }
-  for (const auto& g : s.gyro) gyro_ << g17(g.time) << ',' << g17(g.rate.x()) << ',' << g17(g.rate.y()) << ',' << g17(g.rate.z()) << '\n';
+  for (const auto& g : s.gyro)
+    gyro_ << g17(g.time) << ',' << g17(g.rate.x()) << ',' << g17(g.rate.y()) << ',' << g17(g.rate.z()) << '\n';
   if (frame.truth) {
     for (const auto& p : frame.truth->poses) {
       const Eigen::Quaterniond q(p.world_from_vehicle.rotation());
@@ -315,20 +319,24 @@ void DatasetWriter::finish() {
       "origin on the ground under the robot; lidar: x forward, y left, z up; camera: x right, y down, z forward. "
       "Metres, radians, seconds.";
   m["files"] = {
-      {"calibration.json", "cameras (name, intrinsics [px], 4x4 row-major vehicle_from_camera), 4x4 row-major "
-                           "extrinsics vehicle_from_{lidar,gps}, geodetic origin of the world frame, gyro period [s]"},
+      {"calibration.json",
+       "cameras (name, intrinsics [px], 4x4 row-major vehicle_from_camera), 4x4 row-major "
+       "extrinsics vehicle_from_{lidar,gps}, geodetic origin of the world frame, gyro period [s]"},
       {"lasers.yaml", "laser table in ROS velodyne driver YAML (vert_correction, rot_correction [rad], offsets [m])"},
-      {"frames.csv", "one row per frame: frame, sweep_start_s, sweep_end_s, camera_time_s (every camera's exposure; "
-                     "nan: no images), points"},
-      {"lidar/NNNNNN.pcd", "binary PCD, one per sweep: x y z [m, lidar frame at the firing time] float32, "
-                           "intensity [0-255] float32, ring (laser id) uint16, azimuth [rad, encoder] float32, "
-                           "time [s] float64, label (geom id hit, -1 none) int32, class (0 none, 1 ground, 2 building, "
-                           "3 trunk, 4 crown, 5 robot) uint8"},
+      {"frames.csv",
+       "one row per frame: frame, sweep_start_s, sweep_end_s, camera_time_s (every camera's exposure; "
+       "nan: no images), points"},
+      {"lidar/NNNNNN.pcd",
+       "binary PCD, one per sweep: x y z [m, lidar frame at the firing time] float32, "
+       "intensity [0-255] float32, ring (laser id) uint16, azimuth [rad, encoder] float32, "
+       "time [s] float64, label (geom id hit, -1 none) int32, class (0 none, 1 ground, 2 building, "
+       "3 trunk, 4 crown, 5 robot) uint8"},
       {"camera/NAME/NNNNNN.png", "RGB image of camera NAME (manifest 'cameras'), 8 bit"},
       {"camera/NAME/NNNNNN_depth.tiff", "ground truth depth along the optical axis [m], float32, 0 = nothing hit"},
       {"camera/NAME/NNNNNN_seg.png", "ground truth segmentation, uint16 = geom id + 1, 0 = sky"},
       {"gps.csv", "time_s, latitude_deg, longitude_deg, altitude_m (WGS84 ellipsoid), sigma_m"},
-      {"gyro.csv", "time_s, wx_rad_s, wy_rad_s, wz_rad_s: mean angular rate over the preceding gyro period, vehicle frame"},
+      {"gyro.csv",
+       "time_s, wx_rad_s, wy_rad_s, wz_rad_s: mean angular rate over the preceding gyro period, vehicle frame"},
       {"poses_gt.csv", "ground truth world_from_vehicle: time_s, x_m, y_m, z_m, qw, qx, qy, qz"}};
   io::writeFileAtomic(dir_ / "manifest.json", m.dump(1) + "\n", true);
 }
@@ -345,7 +353,8 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
   } catch (const json::parse_error& e) {
     throw io::InputError(manifest_path.string() + ": not valid JSON (" + e.what() + ")");
   }
-  const std::string format = m.is_object() && m.contains("format") && m["format"].is_string() ? m["format"].get<std::string>() : "";
+  const std::string format =
+      m.is_object() && m.contains("format") && m["format"].is_string() ? m["format"].get<std::string>() : "";
   if (format != kDatasetFormat && format != kDatasetFormatV1) {
     throw io::InputError(manifest_path.string() + ": 'format' must be " + kDatasetFormat + " (or the older " +
                          kDatasetFormatV1 + ")");
@@ -373,7 +382,8 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
       throw io::InputError(manifest_path.string() + ": 'cameras' does not match the cameras of calibration.json");
     for (const auto& n : names) {
       if (!fs::is_directory(dir_ / "camera" / n))
-        throw io::InputError(manifest_path.string() + ": camera '" + n + "' has no images (no folder camera/" + n + "/)");
+        throw io::InputError(manifest_path.string() + ": camera '" + n + "' has no images (no folder camera/" + n +
+                             "/)");
       camera_dirs_.push_back(dir_ / "camera" / n);
     }
   }
@@ -382,8 +392,8 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
   }
   const int declared = m.value("frames", -1);
   if (declared != static_cast<int>(frames_.size())) {
-    throw io::InputError(manifest_path.string() + ": declares " + std::to_string(declared) + " frames, frames.csv has " +
-                         std::to_string(frames_.size()));
+    throw io::InputError(manifest_path.string() + ": declares " + std::to_string(declared) +
+                         " frames, frames.csv has " + std::to_string(frames_.size()));
   }
   const auto gps_row = [](const std::vector<double>& r) -> std::string {
     if (std::abs(r[1]) > 90 || std::abs(r[2]) > 180) return "latitude/longitude outside [-90, 90] / [-180, 180] deg";
@@ -427,8 +437,8 @@ std::optional<RigFrame> DatasetSource::next() {
     for (std::size_t c = 0; c < camera_dirs_.size(); ++c) {
       const fs::path image = camera_dirs_[c] / frameName(row.index, ".png");
       if (!fs::exists(image))
-        throw io::InputError(image.string() + ": missing: frame " + std::to_string(row.index) + " has a camera time but camera '" +
-                             calibration_.cameras[c].name + "' no image");
+        throw io::InputError(image.string() + ": missing: frame " + std::to_string(row.index) +
+                             " has a camera time but camera '" + calibration_.cameras[c].name + "' no image");
       cv::Mat bgr = readImage(image, cv::IMREAD_COLOR, CV_8UC3);
       CameraImage img;
       img.camera = static_cast<int>(c);

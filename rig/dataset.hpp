@@ -26,8 +26,8 @@ class DatasetWriter {
   // Creates dir (refusing a non-empty one unless force) and writes the calibration.
   // producer_json: a JSON object describing how the data was made (scene, settings), kept in the
   // manifest as "producer".
-  DatasetWriter(std::filesystem::path dir, const RigCalibration& calibration,
-                const LaserCalibration& lasers, std::string producer_json, bool force);
+  DatasetWriter(std::filesystem::path dir, const RigCalibration& calibration, const LaserCalibration& lasers,
+                std::string producer_json, bool force);
   ~DatasetWriter();
 
   void write(const RigFrame& frame);

@@ -29,10 +29,10 @@ inline bool isKittiIgnored(std::uint16_t c) { return c == 14; }
 
 // The name of a class in the 19-class learning order ("unlabelled" past it).
 inline const char* kittiClassName(std::uint16_t c) {
-  static const char* const names[] = {"car",      "bicycle",      "motorcycle", "truck",    "other-vehicle",
-                                      "person",   "bicyclist",    "motorcyclist", "road",   "parking",
-                                      "sidewalk", "other-ground", "building",   "fence",    "vegetation",
-                                      "trunk",    "terrain",      "pole",       "traffic-sign"};
+  static const char* const names[] = {"car",      "bicycle",      "motorcycle",   "truck",       "other-vehicle",
+                                      "person",   "bicyclist",    "motorcyclist", "road",        "parking",
+                                      "sidewalk", "other-ground", "building",     "fence",       "vegetation",
+                                      "trunk",    "terrain",      "pole",         "traffic-sign"};
   return c < 19 ? names[c] : "unlabelled";
 }
 

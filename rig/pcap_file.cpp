@@ -94,31 +94,64 @@ bool Reader::next(Frame& frame) {
     // link layer to IPv4
     std::size_t ip = 0;
     if (link_ == kLinkEthernet) {
-      if (n < 14) { ++stats_.malformed; continue; }
+      if (n < 14) {
+        ++stats_.malformed;
+        continue;
+      }
       std::uint16_t type = big16(data + 12);
       ip = 14;
       if (type == 0x8100 && n >= 18) {  // one VLAN tag
         type = big16(data + 16);
         ip = 18;
       }
-      if (type != 0x0800) { ++stats_.other; continue; }
+      if (type != 0x0800) {
+        ++stats_.other;
+        continue;
+      }
     } else if (link_ == kLinkLinuxCooked) {
-      if (n < 16) { ++stats_.malformed; continue; }
-      if (big16(data + 14) != 0x0800) { ++stats_.other; continue; }
+      if (n < 16) {
+        ++stats_.malformed;
+        continue;
+      }
+      if (big16(data + 14) != 0x0800) {
+        ++stats_.other;
+        continue;
+      }
       ip = 16;
     }
-    if (n < ip + 20) { ++stats_.malformed; continue; }
+    if (n < ip + 20) {
+      ++stats_.malformed;
+      continue;
+    }
     const std::uint8_t* h = data + ip;
-    if ((h[0] >> 4) != 4) { ++stats_.other; continue; }
+    if ((h[0] >> 4) != 4) {
+      ++stats_.other;
+      continue;
+    }
     const std::size_t ihl = static_cast<std::size_t>(h[0] & 0x0F) * 4;
-    if (ihl < 20 || n < ip + ihl + 8) { ++stats_.malformed; continue; }
-    if (h[9] != 17) { ++stats_.other; continue; }
-    if ((big16(h + 6) & 0x3FFF) != 0) { ++stats_.fragments; continue; }  // more-fragments flag or an offset
+    if (ihl < 20 || n < ip + ihl + 8) {
+      ++stats_.malformed;
+      continue;
+    }
+    if (h[9] != 17) {
+      ++stats_.other;
+      continue;
+    }
+    if ((big16(h + 6) & 0x3FFF) != 0) {
+      ++stats_.fragments;
+      continue;
+    }  // more-fragments flag or an offset
     const std::uint8_t* udp = h + ihl;
     const std::uint16_t port = big16(udp + 2);
-    if (std::find(ports_.begin(), ports_.end(), port) == ports_.end()) { ++stats_.other; continue; }
+    if (std::find(ports_.begin(), ports_.end(), port) == ports_.end()) {
+      ++stats_.other;
+      continue;
+    }
     const std::size_t udp_len = big16(udp + 4);
-    if (udp_len < 8) { ++stats_.malformed; continue; }
+    if (udp_len < 8) {
+      ++stats_.malformed;
+      continue;
+    }
     // the payload as far as it was captured
     const std::size_t start = ip + ihl + 8;
     const std::size_t len = std::min(udp_len - 8, n - start);

@@ -17,9 +17,9 @@ struct Field {
 };
 
 // record layout, packed, in file order
-constexpr Field kFields[] = {{"x", 4, 'F'},     {"y", 4, 'F'},    {"z", 4, 'F'},
-                             {"intensity", 4, 'F'}, {"ring", 2, 'U'}, {"azimuth", 4, 'F'},
-                             {"time", 8, 'F'},  {"label", 4, 'I'}, {"class", 1, 'U'}};
+constexpr Field kFields[] = {{"x", 4, 'F'},         {"y", 4, 'F'},     {"z", 4, 'F'},
+                             {"intensity", 4, 'F'}, {"ring", 2, 'U'},  {"azimuth", 4, 'F'},
+                             {"time", 8, 'F'},      {"label", 4, 'I'}, {"class", 1, 'U'}};
 constexpr int kRecordSize = 35;
 
 template <typename T>
@@ -109,8 +109,8 @@ DecodedPcd decodePcd(const std::string& bytes, const std::string& origin) {
   for (const auto& f : kFields) {
     auto it = where.find(f.name);
     if (it != where.end() && it->second.second != f.size) {
-      fail("field '" + std::string(f.name) + "' has SIZE " + std::to_string(it->second.second) +
-           ", expected " + std::to_string(f.size));
+      fail("field '" + std::string(f.name) + "' has SIZE " + std::to_string(it->second.second) + ", expected " +
+           std::to_string(f.size));
     }
   }
   for (const char* required : {"x", "y", "z"}) {
@@ -118,8 +118,8 @@ DecodedPcd decodePcd(const std::string& bytes, const std::string& origin) {
   }
   const std::size_t need = static_cast<std::size_t>(points) * record;
   if (bytes.size() - pos < need) {
-    fail("data is truncated: " + std::to_string(bytes.size() - pos) + " bytes for " +
-         std::to_string(points) + " points of " + std::to_string(record) + " bytes");
+    fail("data is truncated: " + std::to_string(bytes.size() - pos) + " bytes for " + std::to_string(points) +
+         " points of " + std::to_string(record) + " bytes");
   }
   DecodedPcd out;
   out.points.resize(points);

@@ -34,9 +34,9 @@ struct CameraTruth {
 
 // Ground truth for one frame; only simulated and recorded-from-simulation sources have it.
 struct FrameTruth {
-  std::vector<PointTruth> points;  // one per LidarSweep point, same order
+  std::vector<PointTruth> points;    // one per LidarSweep point, same order
   std::vector<CameraTruth> cameras;  // one per image of the frame that has truth
-  std::vector<TimedPose> poses;    // true vehicle poses in the frame's time window
+  std::vector<TimedPose> poses;      // true vehicle poses in the frame's time window
 };
 
 struct RigFrame {

@@ -31,14 +31,15 @@ void applySettings(const std::filesystem::path& path, const std::map<std::string
     try {
       it->second(value);
     } catch (const YAML::Exception& e) {
-      throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key + "' has a bad value (" +
-                       e.msg + ")");
+      throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key +
+                       "' has a bad value (" + e.msg + ")");
     }
   };
   // a key is a plain scalar ('? [a, b]: 1' or an empty '? :' is no setting's name)
   const auto keyOf = [&](const YAML::Node& key) {
     if (!key.IsScalar() || key.Scalar().empty()) {
-      throw InputError(path.string() + ":" + std::to_string(key.Mark().line + 1) + ": a key that is not a setting's name");
+      throw InputError(path.string() + ":" + std::to_string(key.Mark().line + 1) +
+                       ": a key that is not a setting's name");
     }
     return key.Scalar();
   };

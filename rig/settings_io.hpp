@@ -28,7 +28,11 @@ void applySetting(const std::string& key_value, const std::map<std::string, Sett
 void requireInRange(bool ok, const std::string& field, double value, const std::string& range);
 
 // Setters for plain fields.
-inline Setter numberSetter(double& f) { return [&f](const YAML::Node& n) { f = n.as<double>(); }; }
-inline Setter integerSetter(int& f) { return [&f](const YAML::Node& n) { f = n.as<int>(); }; }
+inline Setter numberSetter(double& f) {
+  return [&f](const YAML::Node& n) { f = n.as<double>(); };
+}
+inline Setter integerSetter(int& f) {
+  return [&f](const YAML::Node& n) { f = n.as<int>(); };
+}
 
 }  // namespace terrain::io

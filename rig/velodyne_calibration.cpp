@@ -102,8 +102,8 @@ LaserCalibration readYamlLasers(const YAML::Node& root, const std::string& origi
     };
     const double id = get("laser_id", true, 0);
     if (id < 0 || id >= static_cast<double>(lasers.size()) || id != std::floor(id)) {
-      fail(origin, where + ": laser_id " + std::to_string(id) + " is outside [0, " +
-                       std::to_string(lasers.size() - 1) + "]");
+      fail(origin,
+           where + ": laser_id " + std::to_string(id) + " is outside [0, " + std::to_string(lasers.size() - 1) + "]");
     }
     const auto i = static_cast<std::size_t>(id);
     if (seen[i]) fail(origin, where + ": laser_id " + std::to_string(i) + " appears twice");
@@ -129,8 +129,8 @@ LaserCalibration readYamlLasers(const YAML::Node& root, const std::string& origi
 LaserCalibration parseDbXml(const std::string& text, const std::string& origin) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS) {
-    fail(origin, std::string("not valid XML (line ") + std::to_string(doc.ErrorLineNum()) + ": " +
-                     doc.ErrorStr() + ")");
+    fail(origin,
+         std::string("not valid XML (line ") + std::to_string(doc.ErrorLineNum()) + ": " + doc.ErrorStr() + ")");
   }
   const tinyxml2::XMLElement* db = doc.FirstChildElement("boost_serialization");
   db = db ? db->FirstChildElement("DB") : nullptr;
@@ -183,8 +183,8 @@ LaserCalibration parseDbXml(const std::string& text, const std::string& origin) 
 
 LaserCalibration parseLaserCalibration(const std::string& text, const std::string& origin) {
   const auto first = text.find_first_not_of(" \t\r\n");
-  LaserCalibration c = (first != std::string::npos && text[first] == '<') ? parseDbXml(text, origin)
-                                                                          : parseYaml(text, origin);
+  LaserCalibration c =
+      (first != std::string::npos && text[first] == '<') ? parseDbXml(text, origin) : parseYaml(text, origin);
   c.source = origin;
   validate(c, origin);
   return c;

@@ -11,22 +11,22 @@ namespace terrain::rig {
 
 struct LaserCorrection {
   int id = 0;
-  double rot_correction = 0;      // [rad] azimuth offset, subtracted from the encoder angle
-  double vert_correction = 0;     // [rad] elevation of the beam
-  double dist_correction = 0;     // [m] added to the raw distance
-  double dist_correction_x = 0;   // [m] two-point correction, x
-  double dist_correction_y = 0;   // [m] two-point correction, y
-  double vert_offset = 0;         // [m] height of the beam origin above the sensor origin
-  double horiz_offset = 0;        // [m] sideways offset of the beam origin
-  double focal_distance = 0;      // [m] intensity correction
-  double focal_slope = 0;         // intensity correction
+  double rot_correction = 0;     // [rad] azimuth offset, subtracted from the encoder angle
+  double vert_correction = 0;    // [rad] elevation of the beam
+  double dist_correction = 0;    // [m] added to the raw distance
+  double dist_correction_x = 0;  // [m] two-point correction, x
+  double dist_correction_y = 0;  // [m] two-point correction, y
+  double vert_offset = 0;        // [m] height of the beam origin above the sensor origin
+  double horiz_offset = 0;       // [m] sideways offset of the beam origin
+  double focal_distance = 0;     // [m] intensity correction
+  double focal_slope = 0;        // intensity correction
   int min_intensity = 0, max_intensity = 255;
 };
 
 struct LaserCalibration {
-  double distance_resolution = 0.002;  // [m] one unit of the raw distance
-  std::vector<LaserCorrection> lasers; // index == laser id
-  std::string source;                  // file it came from
+  double distance_resolution = 0.002;   // [m] one unit of the raw distance
+  std::vector<LaserCorrection> lasers;  // index == laser id
+  std::string source;                   // file it came from
 
   int laserCount() const { return static_cast<int>(lasers.size()); }
 };

@@ -53,8 +53,8 @@ CaptureSetup setupCapture(const fs::path& path, const CaptureOptions& options) {
   }
   if (setup.data_packets == 0) {
     std::ostringstream m;
-    m << path.string() << ": no lidar data packet (UDP port " << velodyne::kDataPort << ") in the capture: "
-      << reader.stats().summary();
+    m << path.string() << ": no lidar data packet (UDP port " << velodyne::kDataPort
+      << ") in the capture: " << reader.stats().summary();
     if (position_packets > 0) m << "; " << position_packets << " position packets only";
     throw io::InputError(m.str());
   }
@@ -70,7 +70,8 @@ CaptureSetup setupCapture(const fs::path& path, const CaptureOptions& options) {
   const int wanted = velodyne::timing(*model).lasers;
   if (setup.lasers.laserCount() != wanted) {
     throw io::InputError(table.string() + ": " + std::to_string(setup.lasers.laserCount()) + " lasers, but " +
-                         path.string() + " holds " + velodyne::modelName(*model) + " packets (" + std::to_string(wanted) +
+                         path.string() + " holds " + velodyne::modelName(*model) + " packets (" +
+                         std::to_string(wanted) +
                          " lasers); give that sensor's calibration, or none to take the shipped one");
   }
   // the time base: given, else from the GPS time, else from the capture clock
@@ -167,10 +168,13 @@ CaptureScan scanCapture(const fs::path& path, const CaptureOptions& options, con
                             " frames (" + scan.read.error + "); everything before was decoded");
   }
   const auto& d = scan.decode;
-  if (d.lost > 0) scan.warnings.push_back(std::to_string(d.lost) + " data packets lost (gaps in the packet timestamps)");
-  if (d.rejected() > 0) scan.warnings.push_back(std::to_string(d.rejected()) + " data packets rejected: " + d.summary());
+  if (d.lost > 0)
+    scan.warnings.push_back(std::to_string(d.lost) + " data packets lost (gaps in the packet timestamps)");
+  if (d.rejected() > 0)
+    scan.warnings.push_back(std::to_string(d.rejected()) + " data packets rejected: " + d.summary());
   if (scan.position.unreadable + scan.position.bad_sentence > 0) scan.warnings.push_back(scan.position.summary());
-  const long long partial = std::count_if(scan.sweeps.begin(), scan.sweeps.end(), [](const SweepSummary& s) { return s.partial; });
+  const long long partial =
+      std::count_if(scan.sweeps.begin(), scan.sweeps.end(), [](const SweepSummary& s) { return s.partial; });
   if (partial > 0) {
     scan.warnings.push_back(std::to_string(partial) + " of " + std::to_string(scan.sweeps.size()) +
                             " sweeps are partial turns (the capture starts or ends mid-turn, or packets are missing)");

@@ -32,26 +32,26 @@ struct SweepSummary {
 // reads, packets of two models, no sweep.
 struct CaptureScan {
   std::filesystem::path file;
-  std::optional<velodyne::Model> model;  // from the first data packet of a known layout
-  std::string calibration;               // the table decoded with (shipped, or given)
+  std::optional<velodyne::Model> model;      // from the first data packet of a known layout
+  std::string calibration;                   // the table decoded with (shipped, or given)
   long long packets_by_mode[3] = {0, 0, 0};  // strongest, last, dual
   pcap::ReadStats read;
   velodyne::DecodeStats decode;
   PositionStats position;
-  std::vector<GpsFix> fixes;     // on the time base below
+  std::vector<GpsFix> fixes;  // on the time base below
   std::vector<SweepSummary> sweeps;
-  double time_base = 0;          // [s] added to the packets' time since the top of the hour
-  std::string time_base_source;  // "gps" (the position packets' NMEA time), "capture clock" or "given"
+  double time_base = 0;                  // [s] added to the packets' time since the top of the hour
+  std::string time_base_source;          // "gps" (the position packets' NMEA time), "capture clock" or "given"
   double first_time = 0, last_time = 0;  // [s] first and last firing, on the time base
-  double rotation_hz = 0;        // median over the complete sweeps; 0 without one
-  std::vector<std::string> warnings;  // cut-off file, lost and rejected packets, partial sweeps
+  double rotation_hz = 0;                // median over the complete sweeps; 0 without one
+  std::vector<std::string> warnings;     // cut-off file, lost and rejected packets, partial sweeps
   std::string error;
 };
 
 struct CaptureOptions {
-  std::filesystem::path calibration;   // empty: the shipped table of the capture's model
-  std::optional<double> time_base;     // given: used as is; else from the GPS, else the capture clock
-  VelodyneOptions lidar;               // decoder ranges (its time_base is set from the above)
+  std::filesystem::path calibration;  // empty: the shipped table of the capture's model
+  std::optional<double> time_base;    // given: used as is; else from the GPS, else the capture clock
+  VelodyneOptions lidar;              // decoder ranges (its time_base is set from the above)
 };
 
 // The time base of a capture (GPS when its position packets hold a valid RMC sentence, else the
@@ -73,7 +73,8 @@ CaptureSetup setupCapture(const std::filesystem::path& path, const CaptureOption
 // (may be empty) as it is decoded. Input errors end up in `error`; so does an exception of
 // on_sweep's that is an io::InputError.
 using SweepCallback = std::function<void(const LidarSweep&, const SweepSummary&)>;
-CaptureScan scanCapture(const std::filesystem::path& path, const CaptureOptions& options, const SweepCallback& on_sweep = {});
+CaptureScan scanCapture(const std::filesystem::path& path, const CaptureOptions& options,
+                        const SweepCallback& on_sweep = {});
 
 // The pipeline's input from a capture alone: lidar sweeps, GPS fixes from the position packets,
 // no camera, no gyro. The vehicle frame has the lidar mast_height above its origin and the GPS

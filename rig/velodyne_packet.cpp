@@ -53,9 +53,12 @@ const char* modelName(Model model) { return model == Model::Hdl32E ? "HDL-32E" :
 
 const char* returnModeName(ReturnMode mode) {
   switch (mode) {
-    case ReturnMode::Last: return "last";
-    case ReturnMode::Dual: return "dual";
-    default: return "strongest";
+    case ReturnMode::Last:
+      return "last";
+    case ReturnMode::Dual:
+      return "dual";
+    default:
+      return "strongest";
   }
 }
 
@@ -72,7 +75,8 @@ std::optional<Model> packetModel(const std::uint8_t* data, std::size_t size, std
     alternating = alternating && id == (b % 2 == 0 ? kUpperBlock : kLowerBlock);
   }
   if (alternating) return Model::Hdl64E;
-  if (!all_upper) return fail("block ids are neither the HDL-64E's (0xEEFF, 0xDDFF in turn) nor the HDL-32E's (0xEEFF)");
+  if (!all_upper)
+    return fail("block ids are neither the HDL-64E's (0xEEFF, 0xDDFF in turn) nor the HDL-32E's (0xEEFF)");
   const std::uint8_t factory = data[1205];
   if (factory == 0x21 || factory == 0) return Model::Hdl32E;
   if (factory == 0x22) return fail("a VLP-16 packet (model byte 0x22), which this decoder does not read");
@@ -315,7 +319,7 @@ bool SweepAssembler::push(const std::uint8_t* data, std::size_t size, std::vecto
     }
     const int first_laser = (b % ids_per_firing) * kReturnsPerBlock;
     const bool second = copies == 2 && b % 2 == 1;  // the strongest return of a dual pair
-    const int direction = step % kStepsPerTurn;  // 36000 is 0 degrees
+    const int direction = step % kStepsPerTurn;     // 36000 is 0 degrees
     const double ca = (*cos_step_)[direction], sa = (*sin_step_)[direction];
     for (int i = 0; i < kReturnsPerBlock; ++i) {
       const std::uint8_t* r = block + 4 + 3 * i;

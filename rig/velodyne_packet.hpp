@@ -35,8 +35,8 @@ inline constexpr int kReturnsPerBlock = 32;
 inline constexpr std::uint16_t kUpperBlock = 0xEEFF;
 inline constexpr std::uint16_t kLowerBlock = 0xDDFF;
 inline constexpr std::uint16_t kDataPort = 2368;
-inline constexpr std::uint16_t kPositionPort = 8308;   // position packets (rig/velodyne_position.hpp)
-inline constexpr int kStepsPerTurn = 36000;            // rotational positions per revolution
+inline constexpr std::uint16_t kPositionPort = 8308;  // position packets (rig/velodyne_position.hpp)
+inline constexpr int kStepsPerTurn = 36000;           // rotational positions per revolution
 inline constexpr std::uint32_t kMicrosPerHour = 3600000000u;
 
 enum class Model { Hdl64E, Hdl32E };
@@ -78,10 +78,10 @@ struct TimedPacket {
 };
 
 struct EncodeStats {
-  long long points = 0;          // points written into packets
-  long long too_close = 0;       // raw distance would be negative (closer than dist_correction)
-  long long too_far = 0;         // raw distance above 65535 units
-  long long off_schedule = 0;    // point not at a firing of the schedule, or laser out of range
+  long long points = 0;        // points written into packets
+  long long too_close = 0;     // raw distance would be negative (closer than dist_correction)
+  long long too_far = 0;       // raw distance above 65535 units
+  long long off_schedule = 0;  // point not at a firing of the schedule, or laser out of range
   long long packets = 0;
 };
 
@@ -119,29 +119,31 @@ class PacketEncoder {
 };
 
 struct DecodeStats {
-  long long packets = 0;        // payloads offered
-  long long accepted = 0;       // decoded into points
-  long long wrong_size = 0;     // not 1206 bytes (truncated or oversized)
-  long long bad_block = 0;      // unknown block id, block order wrong for the model
-  long long bad_position = 0;   // rotational position > 36000 or jumping inside the packet (36000 is 0 degrees)
-  long long bad_timestamp = 0;  // timestamp beyond the hour
-  long long duplicates = 0;     // the same packet again
-  long long out_of_order = 0;   // older than the last accepted packet
-  long long lost = 0;           // packets missing by the timestamps (rejected ones not among them)
-  long long points = 0;         // returns decoded
-  long long dual_packets = 0;   // packets in dual return mode
-  long long second_returns = 0; // returns of the second block of a dual pair (not repeats of the first)
-  long long sweeps = 0;         // sweeps completed
+  long long packets = 0;         // payloads offered
+  long long accepted = 0;        // decoded into points
+  long long wrong_size = 0;      // not 1206 bytes (truncated or oversized)
+  long long bad_block = 0;       // unknown block id, block order wrong for the model
+  long long bad_position = 0;    // rotational position > 36000 or jumping inside the packet (36000 is 0 degrees)
+  long long bad_timestamp = 0;   // timestamp beyond the hour
+  long long duplicates = 0;      // the same packet again
+  long long out_of_order = 0;    // older than the last accepted packet
+  long long lost = 0;            // packets missing by the timestamps (rejected ones not among them)
+  long long points = 0;          // returns decoded
+  long long dual_packets = 0;    // packets in dual return mode
+  long long second_returns = 0;  // returns of the second block of a dual pair (not repeats of the first)
+  long long sweeps = 0;          // sweeps completed
 
-  long long rejected() const { return wrong_size + bad_block + bad_position + bad_timestamp + duplicates + out_of_order; }
+  long long rejected() const {
+    return wrong_size + bad_block + bad_position + bad_timestamp + duplicates + out_of_order;
+  }
   // one line: every non-zero counter
   std::string summary() const;
 };
 
 struct DecoderOptions {
-  double time_base = 0;   // [s] time of the top of the hour of the first packet
-  double min_range = 0;   // [m] returns closer than this (from the beam origin) are dropped
-  double max_range = 1e9; // [m] returns farther than this are dropped
+  double time_base = 0;    // [s] time of the top of the hour of the first packet
+  double min_range = 0;    // [m] returns closer than this (from the beam origin) are dropped
+  double max_range = 1e9;  // [m] returns farther than this are dropped
 };
 
 // Decodes packets into sweeps. A sweep ends where the rotational position wraps (a firing at a
@@ -174,7 +176,7 @@ class SweepAssembler {
   LidarSweep current_;
   bool have_last_ = false;
   int last_step_ = 0;
-  long long last_time_us_ = 0;   // accepted packet timestamps, unwrapped over hours
+  long long last_time_us_ = 0;  // accepted packet timestamps, unwrapped over hours
   long long hours_ = 0;
   Payload last_payload_{};
   bool have_payload_ = false;

@@ -122,7 +122,8 @@ std::optional<NmeaFix> parseNmea(const std::string& sentence, std::string* why) 
     if (!timeOfDay(f[1], fix.time_of_day)) return fail("RMC time '" + f[1] + "' is not hhmmss");
     fix.valid = f[2] == "A";
     if (fix.valid) {
-      if (!angle(f[3], f[4], 90.0, fix.latitude_deg)) return fail("RMC latitude '" + f[3] + "," + f[4] + "' is not ddmm.mm,N|S");
+      if (!angle(f[3], f[4], 90.0, fix.latitude_deg))
+        return fail("RMC latitude '" + f[3] + "," + f[4] + "' is not ddmm.mm,N|S");
       if (!angle(f[5], f[6], 180.0, fix.longitude_deg))
         return fail("RMC longitude '" + f[5] + "," + f[6] + "' is not dddmm.mm,E|W");
     }
@@ -148,7 +149,8 @@ std::optional<NmeaFix> parseNmea(const std::string& sentence, std::string* why) 
     double quality = 0;
     fix.valid = toDouble(f[6], quality) && quality > 0;
     if (fix.valid) {
-      if (!angle(f[2], f[3], 90.0, fix.latitude_deg)) return fail("GGA latitude '" + f[2] + "," + f[3] + "' is not ddmm.mm,N|S");
+      if (!angle(f[2], f[3], 90.0, fix.latitude_deg))
+        return fail("GGA latitude '" + f[2] + "," + f[3] + "' is not ddmm.mm,N|S");
       if (!angle(f[4], f[5], 180.0, fix.longitude_deg))
         return fail("GGA longitude '" + f[4] + "," + f[5] + "' is not dddmm.mm,E|W");
       double v = 0;
@@ -237,8 +239,8 @@ std::string gprmcSentence(double epoch, double latitude_deg, double longitude_de
   char body[160];
   std::snprintf(body, sizeof body, "GPRMC,%02d%02d%06.3f,%c,%s,%c,%s,%c,%.2f,0.0,%02d%02d%02d,,,A", hh, mm, ss,
                 valid ? 'A' : 'V', ddmm4(latitude_deg, 2).c_str(), latitude_deg < 0 ? 'S' : 'N',
-                ddmm4(longitude_deg, 3).c_str(), longitude_deg < 0 ? 'W' : 'E', speed_mps * 3600.0 / 1852.0, utc.tm_mday,
-                utc.tm_mon + 1, utc.tm_year % 100);
+                ddmm4(longitude_deg, 3).c_str(), longitude_deg < 0 ? 'W' : 'E', speed_mps * 3600.0 / 1852.0,
+                utc.tm_mday, utc.tm_mon + 1, utc.tm_year % 100);
   return withChecksum(body);
 }
 

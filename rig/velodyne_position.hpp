@@ -23,15 +23,15 @@ inline constexpr std::size_t kNmeaOffset = 206;
 
 // What one NMEA sentence says about position and time.
 struct NmeaFix {
-  std::string type;            // "GPRMC" or "GPGGA" (any talker: GN, GL, ... read alike)
-  bool valid = false;          // RMC status A, or GGA quality > 0
-  double time_of_day = 0;      // [s] UTC since midnight
-  std::optional<double> epoch; // [s] UTC since 1970 (RMC: it carries the date; GGA has none)
-  double latitude_deg = 0;     // [deg] north positive
-  double longitude_deg = 0;    // [deg] east positive
+  std::string type;                  // "GPRMC" or "GPGGA" (any talker: GN, GL, ... read alike)
+  bool valid = false;                // RMC status A, or GGA quality > 0
+  double time_of_day = 0;            // [s] UTC since midnight
+  std::optional<double> epoch;       // [s] UTC since 1970 (RMC: it carries the date; GGA has none)
+  double latitude_deg = 0;           // [deg] north positive
+  double longitude_deg = 0;          // [deg] east positive
   std::optional<double> altitude_m;  // [m] GGA: above mean sea level plus the geoid separation
   std::optional<double> hdop;        // GGA horizontal dilution of precision
-  double speed_mps = 0;        // RMC speed over ground [m/s]
+  double speed_mps = 0;              // RMC speed over ground [m/s]
 };
 
 // Parses one $--RMC or $--GGA sentence (with or without the trailing CR LF). Checks the checksum
@@ -46,7 +46,8 @@ struct PositionPacket {
 
 // Reads a position packet. nullopt (and *why) if the payload is not 512 bytes or its timestamp
 // lies beyond the hour.
-std::optional<PositionPacket> parsePositionPacket(const std::uint8_t* data, std::size_t size, std::string* why = nullptr);
+std::optional<PositionPacket> parsePositionPacket(const std::uint8_t* data, std::size_t size,
+                                                  std::string* why = nullptr);
 
 // A position packet carrying `sentence` at `timestamp_us` (the tests' and the recorder's encoder).
 std::vector<std::uint8_t> positionPacket(std::uint32_t timestamp_us, const std::string& sentence, std::uint8_t pps = 2);

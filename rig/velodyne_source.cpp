@@ -151,10 +151,12 @@ std::optional<LidarSweep> VelodyneLidar::next() {
         position(f.payload);
         continue;
       }
-      if (got && !assembler_.push(f.payload.data(), f.payload.size(), ready_)) checkModel(f.payload.data(), f.payload.size());
+      if (got && !assembler_.push(f.payload.data(), f.payload.size(), ready_))
+        checkModel(f.payload.data(), f.payload.size());
     } else {
       const double wait = received_ ? options_.idle_timeout : options_.first_timeout;
-      const long n = udp_->receive(buffer_.data(), buffer_.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
+      const long n =
+          udp_->receive(buffer_.data(), buffer_.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
       got = n >= 0;
       if (!got && !received_) {
         std::ostringstream m;
@@ -171,7 +173,8 @@ std::optional<LidarSweep> VelodyneLidar::next() {
     if (!got) {
       ended_ = true;
       if (auto last = assembler_.flush()) ready_.push_back(std::move(*last));
-      if (assembler_.stats().sweeps == 0) throw io::InputError(endpoint_.describe() + ": no sweep decoded (" + summary() + ")");
+      if (assembler_.stats().sweeps == 0)
+        throw io::InputError(endpoint_.describe() + ": no sweep decoded (" + summary() + ")");
     }
   }
   return std::move(ready_[ready_pos_++]);
@@ -181,10 +184,10 @@ void VelodyneLidar::checkModel(const std::uint8_t* data, std::size_t size) {
   const auto model = velodyne::packetModel(data, size);
   if (model && *model != assembler_.model()) {
     const LaserCalibration& c = assembler_.calibration();
-    throw io::InputError(endpoint_.describe() + ": the packets are an " + velodyne::modelName(*model) + "'s, but the calibration " +
-                         c.source + " has " + std::to_string(c.laserCount()) + " lasers (an " +
-                         velodyne::modelName(assembler_.model()) + "); give the " + velodyne::modelName(*model) +
-                         "'s calibration, or none to take the shipped one");
+    throw io::InputError(endpoint_.describe() + ": the packets are an " + velodyne::modelName(*model) +
+                         "'s, but the calibration " + c.source + " has " + std::to_string(c.laserCount()) +
+                         " lasers (an " + velodyne::modelName(assembler_.model()) + "); give the " +
+                         velodyne::modelName(*model) + "'s calibration, or none to take the shipped one");
   }
 }
 
@@ -247,7 +250,8 @@ std::string PositionStats::summary() const {
 }
 
 std::string VelodyneLidar::summary() const {
-  std::string s = endpoint_.describe() + " (" + velodyne::modelName(assembler_.model()) + "): " + assembler_.stats().summary();
+  std::string s =
+      endpoint_.describe() + " (" + velodyne::modelName(assembler_.model()) + "): " + assembler_.stats().summary();
   if (position_.packets > 0) s += "; " + position_.summary();
   if (pcap_) s += "; capture: " + pcap_->stats().summary();
   return s;
@@ -287,7 +291,8 @@ void LidarSwapSource::pullUntil(double time) {
       poses_.insert(poses_.end(), f->truth->poses.begin(), f->truth->poses.end());
       const auto& pts = s.sweep.points;
       for (std::size_t i = 0; i < pts.size() && i < f->truth->points.size(); ++i) {
-        if (pts[i].ring < truth_by_laser_.size()) truth_by_laser_[pts[i].ring].push_back({pts[i].time, f->truth->points[i]});
+        if (pts[i].ring < truth_by_laser_.size())
+          truth_by_laser_[pts[i].ring].push_back({pts[i].time, f->truth->points[i]});
       }
     }
   }

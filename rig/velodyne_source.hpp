@@ -67,19 +67,19 @@ class UdpSender {
 
 struct VelodyneOptions {
   velodyne::DecoderOptions decoder;
-  double idle_timeout = 2.0;  // [s] a live stream ends after this long without a packet (once one came)
+  double idle_timeout = 2.0;    // [s] a live stream ends after this long without a packet (once one came)
   double first_timeout = 30.0;  // [s] no packet within this long is an error
 };
 
 // What the position packets (port 8308) of a capture held.
 struct PositionStats {
-  long long packets = 0;      // datagrams to port 8308
-  long long unreadable = 0;   // not a position packet (size, timestamp)
-  long long no_sentence = 0;  // no NMEA sentence in it
-  long long bad_sentence = 0; // a sentence that does not parse (checksum, fields)
-  long long no_fix = 0;       // a sentence that says the receiver has no fix (RMC V, GGA quality 0)
-  long long fixes = 0;        // valid fixes
-  std::string first_problem;  // the first unreadable packet's or bad sentence's reason
+  long long packets = 0;       // datagrams to port 8308
+  long long unreadable = 0;    // not a position packet (size, timestamp)
+  long long no_sentence = 0;   // no NMEA sentence in it
+  long long bad_sentence = 0;  // a sentence that does not parse (checksum, fields)
+  long long no_fix = 0;        // a sentence that says the receiver has no fix (RMC V, GGA quality 0)
+  long long fixes = 0;         // valid fixes
+  std::string first_problem;   // the first unreadable packet's or bad sentence's reason
 
   std::string summary() const;
 };
@@ -131,9 +131,9 @@ class VelodyneLidar {
 
 // A rig whose lidar sweeps come from a VelodyneLidar and whose camera, GPS and gyro come from
 // another source: each sweep takes the images, fixes and gyro samples timed from its start to
-// just before its end, as the simulated rig frames them. When the other source carries ground truth, each decoded point takes the
-// truth of the other source's point of the same laser and firing (within 10 us); poses and
-// images keep theirs; a point without a partner gets class 0 (unknown), which scoring skips.
+// just before its end, as the simulated rig frames them. When the other source carries ground truth, each decoded point
+// takes the truth of the other source's point of the same laser and firing (within 10 us); poses and images keep
+// theirs; a point without a partner gets class 0 (unknown), which scoring skips.
 class LidarSwapSource : public SensorSource {
  public:
   LidarSwapSource(std::unique_ptr<SensorSource> others, std::unique_ptr<VelodyneLidar> lidar);

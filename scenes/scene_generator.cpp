@@ -28,7 +28,7 @@ struct TypeRecipe {
   int buildings_per_100m = 0;                 // first row, both sides together
   bool second_row = false;
   int trees = 0;
-  double path_amplitude = 3.0;                // [m] lateral wiggle of the path
+  double path_amplitude = 3.0;  // [m] lateral wiggle of the path
 };
 
 TypeRecipe recipeFor(const std::string& type) {
@@ -82,8 +82,7 @@ double valueNoise(std::uint64_t seed, double x, double y) {
   const double fx = std::floor(x), fy = std::floor(y);
   const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy);
   auto lattice = [&](std::int64_t i, std::int64_t j) {
-    return 2.0 * unitFromBits(hashKeys(seed, static_cast<std::uint64_t>(i),
-                                       static_cast<std::uint64_t>(j))) - 1.0;
+    return 2.0 * unitFromBits(hashKeys(seed, static_cast<std::uint64_t>(i), static_cast<std::uint64_t>(j))) - 1.0;
   };
   auto smooth = [](double t) { return t * t * t * (t * (6 * t - 15) + 10); };
   const double tx = smooth(x - fx), ty = smooth(y - fy);
@@ -307,7 +306,8 @@ class SceneBuilder {
       const Eigen::Vector2d normal(-dir.y(), dir.x());
       const Eigen::Vector2d centre = q.nearest + side * setback * normal;
       const Disc disc{centre, 0.5 * std::hypot(width, depth) + 1.0};
-      if (std::abs(centre.x()) + disc.radius > cfg_.extent || std::abs(centre.y()) + disc.radius > cfg_.extent) continue;
+      if (std::abs(centre.x()) + disc.radius > cfg_.extent || std::abs(centre.y()) + disc.radius > cfg_.extent)
+        continue;
       // keep a street corridor of 6 m either side of the path
       if (queryPath(truth_.path, centre).distance < 0.5 * depth + 6.0) continue;
       if (overlaps(taken_, disc)) continue;
@@ -345,7 +345,7 @@ class SceneBuilder {
   }
 
   int facadeFor(const std::string& id) const {
-    return static_cast<int>(hashKeys(cfg_.seed, std::hash<std::string>{}(id) & 0xffff) % 3) + 1;
+    return static_cast<int>(hashKeys(cfg_.seed, std::hash<std::string>{}(id)&0xffff) % 3) + 1;
   }
 
   // trees avoid the path corridor and the buildings; crowns take one of four shapes
@@ -357,10 +357,21 @@ class SceneBuilder {
       const int shape = rng_.uniformInt(0, 3);
       double rx = 0, rz = 0;  // crown horizontal radius and vertical half extent
       switch (shape) {
-        case 0: rx = rz = std::min(0.22 * height, 5.0); break;                 // round
-        case 1: rx = 0.16 * height; rz = 0.3 * height; break;                  // tall ellipsoid
-        case 2: rx = std::min(0.3 * height, 6.0); rz = 0.18 * height; break;   // wide ellipsoid
-        default: rx = 0.11 * height; rz = 0.35 * height; break;               // conifer capsule
+        case 0:
+          rx = rz = std::min(0.22 * height, 5.0);
+          break;  // round
+        case 1:
+          rx = 0.16 * height;
+          rz = 0.3 * height;
+          break;  // tall ellipsoid
+        case 2:
+          rx = std::min(0.3 * height, 6.0);
+          rz = 0.18 * height;
+          break;  // wide ellipsoid
+        default:
+          rx = 0.11 * height;
+          rz = 0.35 * height;
+          break;  // conifer capsule
       }
       rx = std::max(rx, 0.8);
       const Disc disc{p, rx + 0.5};
@@ -425,18 +436,25 @@ class SceneBuilder {
       << "    <rgba haze=\"0.8 0.87 0.95 1\"/>\n"
       << "  </visual>\n"
       << "  <asset>\n"
-      << "    <texture name=\"sky\" type=\"skybox\" builtin=\"gradient\" rgb1=\"0.45 0.62 0.88\" rgb2=\"0.9 0.94 1\" width=\"256\" height=\"256\"/>\n"
-      << "    <texture name=\"grass\" type=\"2d\" builtin=\"flat\" mark=\"random\" random=\"0.25\" rgb1=\"0.33 0.42 0.22\" markrgb=\"0.45 0.5 0.3\" width=\"256\" height=\"256\"/>\n"
+      << "    <texture name=\"sky\" type=\"skybox\" builtin=\"gradient\" rgb1=\"0.45 0.62 0.88\" rgb2=\"0.9 0.94 1\" "
+         "width=\"256\" height=\"256\"/>\n"
+      << "    <texture name=\"grass\" type=\"2d\" builtin=\"flat\" mark=\"random\" random=\"0.25\" rgb1=\"0.33 0.42 "
+         "0.22\" markrgb=\"0.45 0.5 0.3\" width=\"256\" height=\"256\"/>\n"
       << "    <material name=\"ground\" texture=\"grass\" texrepeat=\"40 40\"/>\n"
-      << "    <texture name=\"facade1\" type=\"cube\" builtin=\"checker\" rgb1=\"0.78 0.74 0.66\" rgb2=\"0.32 0.4 0.52\" width=\"64\" height=\"64\"/>\n"
-      << "    <texture name=\"facade2\" type=\"cube\" builtin=\"checker\" rgb1=\"0.62 0.5 0.44\" rgb2=\"0.25 0.3 0.36\" width=\"64\" height=\"64\"/>\n"
-      << "    <texture name=\"facade3\" type=\"cube\" builtin=\"checker\" rgb1=\"0.85 0.85 0.82\" rgb2=\"0.4 0.5 0.6\" width=\"64\" height=\"64\"/>\n"
+      << "    <texture name=\"facade1\" type=\"cube\" builtin=\"checker\" rgb1=\"0.78 0.74 0.66\" rgb2=\"0.32 0.4 "
+         "0.52\" width=\"64\" height=\"64\"/>\n"
+      << "    <texture name=\"facade2\" type=\"cube\" builtin=\"checker\" rgb1=\"0.62 0.5 0.44\" rgb2=\"0.25 0.3 "
+         "0.36\" width=\"64\" height=\"64\"/>\n"
+      << "    <texture name=\"facade3\" type=\"cube\" builtin=\"checker\" rgb1=\"0.85 0.85 0.82\" rgb2=\"0.4 0.5 0.6\" "
+         "width=\"64\" height=\"64\"/>\n"
       << "    <material name=\"facade1\" texture=\"facade1\" texrepeat=\"6 6\"/>\n"
       << "    <material name=\"facade2\" texture=\"facade2\" texrepeat=\"6 6\"/>\n"
       << "    <material name=\"facade3\" texture=\"facade3\" texrepeat=\"6 6\"/>\n"
-      << "    <texture name=\"bark\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.3\" rgb1=\"0.36 0.26 0.17\" rgb2=\"0.36 0.26 0.17\" markrgb=\"0.22 0.16 0.1\" width=\"32\" height=\"32\"/>\n"
+      << "    <texture name=\"bark\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.3\" rgb1=\"0.36 0.26 "
+         "0.17\" rgb2=\"0.36 0.26 0.17\" markrgb=\"0.22 0.16 0.1\" width=\"32\" height=\"32\"/>\n"
       << "    <material name=\"bark\" texture=\"bark\"/>\n"
-      << "    <texture name=\"leaves\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.35\" rgb1=\"0.13 0.38 0.12\" rgb2=\"0.13 0.38 0.12\" markrgb=\"0.3 0.55 0.2\" width=\"64\" height=\"64\"/>\n"
+      << "    <texture name=\"leaves\" type=\"cube\" builtin=\"flat\" mark=\"random\" random=\"0.35\" rgb1=\"0.13 0.38 "
+         "0.12\" rgb2=\"0.13 0.38 0.12\" markrgb=\"0.3 0.55 0.2\" width=\"64\" height=\"64\"/>\n"
       << "    <material name=\"leaves\" texture=\"leaves\"/>\n"
       << "    <material name=\"robot\" rgba=\"0.85 0.55 0.1 1\"/>\n";
     const TerrainTruth& t = truth_.terrain;
@@ -449,10 +467,12 @@ class SceneBuilder {
       << "    <geom contype=\"0\" conaffinity=\"0\"/>\n"
       << "  </default>\n"
       << "  <worldbody>\n"
-      << "    <light name=\"sun\" directional=\"true\" castshadow=\"false\" pos=\"0 0 100\" dir=\"-0.3 -0.4 -1\" diffuse=\"0.7 0.7 0.7\"/>\n";
+      << "    <light name=\"sun\" directional=\"true\" castshadow=\"false\" pos=\"0 0 100\" dir=\"-0.3 -0.4 -1\" "
+         "diffuse=\"0.7 0.7 0.7\"/>\n";
     if (t.kind == "hfield") {
-      x << "    <geom name=\"" << t.geom << "\" type=\"hfield\" hfield=\"terrain\" material=\"ground\" group=\"0\" pos=\""
-        << num(t.pos.x()) << " " << num(t.pos.y()) << " " << num(t.pos.z()) << "\"/>\n";
+      x << "    <geom name=\"" << t.geom
+        << "\" type=\"hfield\" hfield=\"terrain\" material=\"ground\" group=\"0\" pos=\"" << num(t.pos.x()) << " "
+        << num(t.pos.y()) << " " << num(t.pos.z()) << "\"/>\n";
     } else {
       x << "    <geom name=\"" << t.geom << "\" type=\"plane\" material=\"ground\" group=\"0\" size=\""
         << num(cfg_.extent) << " " << num(cfg_.extent) << " 1\"/>\n";
@@ -462,8 +482,10 @@ class SceneBuilder {
     // group 3, which the camera does not draw and the lidar excludes
     const Eigen::Vector2d start = truth_.path.front();
     x << "    <body name=\"robot\" mocap=\"true\" pos=\"" << num(start.x()) << " " << num(start.y()) << " 0\">\n"
-      << "      <geom name=\"robot_chassis\" type=\"box\" size=\"0.5 0.35 0.2\" pos=\"0 0 0.35\" material=\"robot\" group=\"3\"/>\n"
-      << "      <geom name=\"robot_mast\" type=\"cylinder\" size=\"0.04 0.8\" pos=\"0 0 1\" material=\"robot\" group=\"3\"/>\n"
+      << "      <geom name=\"robot_chassis\" type=\"box\" size=\"0.5 0.35 0.2\" pos=\"0 0 0.35\" material=\"robot\" "
+         "group=\"3\"/>\n"
+      << "      <geom name=\"robot_mast\" type=\"cylinder\" size=\"0.04 0.8\" pos=\"0 0 1\" material=\"robot\" "
+         "group=\"3\"/>\n"
       << "      <camera name=\"robot_camera\" pos=\"0.1 0 1.6\" xyaxes=\"0 -1 0 0 0 1\" fovy=\"75\"/>\n"
       << "    </body>\n"
       << "  </worldbody>\n"

@@ -17,8 +17,8 @@ const std::vector<std::string>& sceneTypes();
 struct SceneConfig {
   std::string type = "urban";  // one of sceneTypes()
   std::uint64_t seed = 1;
-  double extent = 80.0;        // [m] half side of the square scene area
-  double hfield_cell = 0.5;    // [m] heightfield grid spacing
+  double extent = 80.0;                            // [m] half side of the square scene area
+  double hfield_cell = 0.5;                        // [m] heightfield grid spacing
   GeodeticOrigin origin{37.5585, 126.9990, 60.0};  // world ENU origin (Seoul, near the paper's lab)
 };
 

@@ -58,8 +58,7 @@ class Reader {
     if (!v.is_string()) fail(join(where, key), "must be a string");
     return v.get<std::string>();
   }
-  std::vector<Eigen::Vector2d> points(const json& j, const std::string& key,
-                                      const std::string& where) const {
+  std::vector<Eigen::Vector2d> points(const json& j, const std::string& key, const std::string& where) const {
     const json& v = at(j, key, where);
     if (!v.is_array()) fail(join(where, key), "must be an array of [x, y]");
     std::vector<Eigen::Vector2d> out;
@@ -245,7 +244,8 @@ SceneTruth loadTruth(const fs::path& path) {
   if (t.path.size() < 2) r.fail("path.waypoints", "needs at least 2 points");
   for (std::size_t k = 1; k < t.path.size(); ++k) {
     if ((t.path[k] - t.path[k - 1]).norm() < 1e-6) {
-      r.fail("path.waypoints", "points " + std::to_string(k - 1) + " and " + std::to_string(k) + " are the same (a segment of length 0)");
+      r.fail("path.waypoints",
+             "points " + std::to_string(k - 1) + " and " + std::to_string(k) + " are the same (a segment of length 0)");
     }
   }
   return t;

@@ -26,12 +26,12 @@ inline bool isObjectClass(GeomClass c) {
 }
 
 struct ObjectTruth {
-  std::string id;                       // "building_003", "tree_017"
+  std::string id;                            // "building_003", "tree_017"
   GeomClass object_class = GeomClass::None;  // Building, or Crown for trees
-  std::vector<std::string> geoms;       // MJCF geom names that make up the object
-  std::vector<Eigen::Vector2d> footprint;  // [m] world x, y polygon, counter-clockwise
-  double base_height = 0;               // [m] world z of the terrain at the object's base (lowest)
-  double top_height = 0;                // [m] world z of the object's highest point
+  std::vector<std::string> geoms;            // MJCF geom names that make up the object
+  std::vector<Eigen::Vector2d> footprint;    // [m] world x, y polygon, counter-clockwise
+  double base_height = 0;                    // [m] world z of the terrain at the object's base (lowest)
+  double top_height = 0;                     // [m] world z of the object's highest point
 };
 
 struct TerrainTruth {
@@ -40,9 +40,9 @@ struct TerrainTruth {
   // hfield only: file next to the MJCF, grid size and placement as in MJCF (row 0 at y = -size_y)
   std::string hfield_file;
   int nrow = 0, ncol = 0;
-  Eigen::Vector3d pos = Eigen::Vector3d::Zero();  // [m] geom position
+  Eigen::Vector3d pos = Eigen::Vector3d::Zero();   // [m] geom position
   Eigen::Vector4d size = Eigen::Vector4d::Zero();  // [m] (half x, half y, z top, z bottom)
-  std::vector<float> elevation;  // normalised [0, 1], nrow x ncol, not serialised (read from file)
+  std::vector<float> elevation;                    // normalised [0, 1], nrow x ncol, not serialised (read from file)
 };
 
 struct SceneTruth {

@@ -128,7 +128,8 @@ CameraRender CameraRenderer::render(const Pose& world_from_camera) {
   const double extent = model_->stat.extent;
   const double znear = model_->vis.map.znear * extent, zfar = model_->vis.map.zfar * extent;
   for (int y = 0; y < h; ++y) {
-    std::memcpy(out.rgb.ptr(y), rgb.data() + static_cast<std::size_t>(h - 1 - y) * w * 3, static_cast<std::size_t>(w) * 3);
+    std::memcpy(out.rgb.ptr(y), rgb.data() + static_cast<std::size_t>(h - 1 - y) * w * 3,
+                static_cast<std::size_t>(w) * 3);
     const float* src = depth.data() + static_cast<std::size_t>(h - 1 - y) * w;
     float* dst = out.depth.ptr<float>(y);
     for (int x = 0; x < w; ++x) {

@@ -98,7 +98,8 @@ double rayHfield(const mjModel* m, const mjData* d, int id, const mjtNum pnt[3],
     // nearly every cell it passes)
     const double z_low = lp[2] + std::min(cell_entry * lv[2], std::min(cell_exit, t_out) * lv[2]);
     float top = -std::numeric_limits<float>::infinity();
-    const int r0 = std::max(0, r - 1), r1 = std::min(nrow - 1, r + 2), c0 = std::max(0, c - 1), c1 = std::min(ncol - 1, c + 2);
+    const int r0 = std::max(0, r - 1), r1 = std::min(nrow - 1, r + 2), c0 = std::max(0, c - 1),
+              c1 = std::min(ncol - 1, c + 2);
     for (int rr = r0; rr <= r1; ++rr) {
       for (int cc = c0; cc <= c1; ++cc) top = std::max(top, data[rr * ncol + cc]);
     }
@@ -172,9 +173,10 @@ double heightAboveGeoms(const mjModel* m, const mjData* d) {
 double terrainHeightAt(const mjModel* m, const mjData* d, int terrain_geom, double from, double x, double y) {
   const mjtNum pnt[3] = {x, y, from}, down[3] = {0, 0, -1};
   const int type = m->geom_type[terrain_geom];
-  const mjtNum dist = type == mjGEOM_HFIELD ? rayHfield(m, d, terrain_geom, pnt, down)
-                                            : mju_rayGeom(d->geom_xpos + 3 * terrain_geom, d->geom_xmat + 9 * terrain_geom,
-                                                          m->geom_size + 3 * terrain_geom, pnt, down, type);
+  const mjtNum dist = type == mjGEOM_HFIELD
+                          ? rayHfield(m, d, terrain_geom, pnt, down)
+                          : mju_rayGeom(d->geom_xpos + 3 * terrain_geom, d->geom_xmat + 9 * terrain_geom,
+                                        m->geom_size + 3 * terrain_geom, pnt, down, type);
   return dist < 0 ? std::numeric_limits<double>::quiet_NaN() : from - dist;
 }
 

@@ -16,11 +16,16 @@ namespace {
 // share of the beam energy a class sends back, for the intensity channel
 double reflectivity(scenes::GeomClass c) {
   switch (c) {
-    case scenes::GeomClass::Ground: return 0.30;
-    case scenes::GeomClass::Building: return 0.55;
-    case scenes::GeomClass::Trunk: return 0.35;
-    case scenes::GeomClass::Crown: return 0.20;
-    default: return 0.40;
+    case scenes::GeomClass::Ground:
+      return 0.30;
+    case scenes::GeomClass::Building:
+      return 0.55;
+    case scenes::GeomClass::Trunk:
+      return 0.35;
+    case scenes::GeomClass::Crown:
+      return 0.20;
+    default:
+      return 0.40;
   }
 }
 
@@ -38,7 +43,8 @@ LidarSimulator::LidarSimulator(const World& world, const RayCaster& caster, rig:
       threads_(threads),
       firings_(static_cast<int>(std::lround(config.firing_rate_hz / config.rotation_hz))) {
   for (int l = 0; l < lasers_.laserCount(); ++l) {
-    bias_.push_back(config_.laser_bias * Random::normalFromBits(hashKeys(seed_, 0xB1A5, l, 1), hashKeys(seed_, 0xB1A5, l, 2)));
+    bias_.push_back(config_.laser_bias *
+                    Random::normalFromBits(hashKeys(seed_, 0xB1A5, l, 1), hashKeys(seed_, 0xB1A5, l, 2)));
   }
 }
 
@@ -63,8 +69,8 @@ SimulatedSweep LidarSimulator::simulate(int sweep_index, double start_time, cons
         rig::laserRay(laser, a, o, dir);
         const RayHit hit = caster_.cast(world_from_lidar * o, world_from_lidar.linear() * dir);
         if (hit.geom < 0 || hit.distance > config_.max_range) continue;
-        const std::uint64_t key = hashKeys(seed_, static_cast<std::uint64_t>(sweep_index), static_cast<std::uint64_t>(j),
-                                           static_cast<std::uint64_t>(l));
+        const std::uint64_t key = hashKeys(seed_, static_cast<std::uint64_t>(sweep_index),
+                                           static_cast<std::uint64_t>(j), static_cast<std::uint64_t>(l));
         if (config_.dropout > 0 && unitFromBits(mixBits(key ^ 0xD50F)) < config_.dropout) continue;
         const double noise = config_.range_noise * Random::normalFromBits(mixBits(key ^ 1), mixBits(key ^ 2));
         const double measured = hit.distance + noise + bias_[l];
@@ -78,9 +84,13 @@ SimulatedSweep LidarSimulator::simulate(int sweep_index, double start_time, cons
         const double intensity = 255.0 * reflectivity(cls) * falloff * (0.9 + 0.2 * unitFromBits(mixBits(key ^ 3)));
         Slot& s = slots[static_cast<std::size_t>(j) * nl + l];
         s.valid = true;
-        s.point = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()),
-                   static_cast<float>(std::min(255.0, intensity)), static_cast<std::uint16_t>(l),
-                   static_cast<float>(a), t};
+        s.point = {static_cast<float>(p.x()),
+                   static_cast<float>(p.y()),
+                   static_cast<float>(p.z()),
+                   static_cast<float>(std::min(255.0, intensity)),
+                   static_cast<std::uint16_t>(l),
+                   static_cast<float>(a),
+                   t};
         s.truth = {hit.geom, static_cast<std::uint8_t>(cls)};
       }
     }

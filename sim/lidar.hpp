@@ -1,8 +1,9 @@
 #pragma once
 // Simulated Velodyne lidar: every laser of the calibration table fires at each firing of the
-// revolution (at encoder positions on the sensor's 0.01 deg grid, rig::velodyne::encoderStep), each firing at its own time while the vehicle moves (so sweeps carry real
-// motion skew). Ranges come from the ray caster (mj_ray semantics); Gaussian range noise, an
-// optional per-laser bias and dropout are added; returns above the height cap are not reported.
+// revolution (at encoder positions on the sensor's 0.01 deg grid, rig::velodyne::encoderStep), each firing at its own
+// time while the vehicle moves (so sweeps carry real motion skew). Ranges come from the ray caster (mj_ray semantics);
+// Gaussian range noise, an optional per-laser bias and dropout are added; returns above the height cap are not
+// reported.
 
 #include "core/sensor_data.hpp"
 #include "rig/sensor_source.hpp"

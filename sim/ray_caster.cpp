@@ -29,11 +29,20 @@ Eigen::Vector3d halfExtent(const mjModel* m, const mjData* d, int g) {
   Eigen::Vector3d local;
   switch (m->geom_type[g]) {
     case mjGEOM_BOX:
-    case mjGEOM_ELLIPSOID: local = Eigen::Vector3d(size[0], size[1], size[2]); break;
-    case mjGEOM_SPHERE: local = Eigen::Vector3d::Constant(size[0]); break;
-    case mjGEOM_CYLINDER: local = Eigen::Vector3d(size[0], size[0], size[1]); break;
-    case mjGEOM_CAPSULE: local = Eigen::Vector3d(size[0], size[0], size[1] + size[0]); break;
-    default: return Eigen::Vector3d::Constant(m->geom_rbound[g]);
+    case mjGEOM_ELLIPSOID:
+      local = Eigen::Vector3d(size[0], size[1], size[2]);
+      break;
+    case mjGEOM_SPHERE:
+      local = Eigen::Vector3d::Constant(size[0]);
+      break;
+    case mjGEOM_CYLINDER:
+      local = Eigen::Vector3d(size[0], size[0], size[1]);
+      break;
+    case mjGEOM_CAPSULE:
+      local = Eigen::Vector3d(size[0], size[0], size[1] + size[0]);
+      break;
+    default:
+      return Eigen::Vector3d::Constant(m->geom_rbound[g]);
   }
   // geom_xmat is row-major world_from_geom: the box's extent along world axis i is
   // sum_j |R_ij| local_j
@@ -47,8 +56,8 @@ Eigen::Vector3d halfExtent(const mjModel* m, const mjData* d, int g) {
 }
 
 // entry distance of the ray into a box, or +inf if it misses it within [0, tmax]
-double slab(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& p,
-            const Eigen::Vector3d& inv, double tmax) {
+double slab(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& p, const Eigen::Vector3d& inv,
+            double tmax) {
   double t0 = 0, t1 = tmax;
   for (int a = 0; a < 3; ++a) {
     double n = (lo[a] - p[a]) * inv[a], f = (hi[a] - p[a]) * inv[a];
@@ -63,8 +72,7 @@ double slab(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::V
 
 }  // namespace
 
-RayCaster::RayCaster(const mjModel* m, const mjData* d, int bodyexclude)
-    : m_(m), d_(d), bodyexclude_(bodyexclude) {
+RayCaster::RayCaster(const mjModel* m, const mjData* d, int bodyexclude) : m_(m), d_(d), bodyexclude_(bodyexclude) {
   for (int g = 0; g < m->ngeom; ++g) {
     if (eliminated(m, g, bodyexclude)) continue;
     const int type = m->geom_type[g];
@@ -127,8 +135,10 @@ int RayCaster::build(int first, int count) {
 
 double RayCaster::castGeom(int g, const mjtNum* pnt, const mjtNum* vec) const {
   switch (m_->geom_type[g]) {
-    case mjGEOM_MESH: return mj_rayMesh(m_, d_, g, pnt, vec);
-    case mjGEOM_HFIELD: return rayHfield(m_, d_, g, pnt, vec);
+    case mjGEOM_MESH:
+      return mj_rayMesh(m_, d_, g, pnt, vec);
+    case mjGEOM_HFIELD:
+      return rayHfield(m_, d_, g, pnt, vec);
     default:
       return mju_rayGeom(d_->geom_xpos + 3 * g, d_->geom_xmat + 9 * g, m_->geom_size + 3 * g, pnt, vec,
                          m_->geom_type[g]);

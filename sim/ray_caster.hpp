@@ -31,7 +31,7 @@ class RayCaster {
 
  private:
   struct Node {
-    Eigen::Vector3d lo, hi;  // bounding box
+    Eigen::Vector3d lo, hi;    // bounding box
     int first = 0, count = 0;  // leaf: range in order_; inner: count == 0
     int left = -1, right = -1;
   };
@@ -42,8 +42,8 @@ class RayCaster {
   const mjModel* m_;
   const mjData* d_;
   int bodyexclude_;
-  std::vector<int> unbounded_;  // planes and heightfields
-  std::vector<int> order_;      // bounded geoms, ordered by the hierarchy
+  std::vector<int> unbounded_;                    // planes and heightfields
+  std::vector<int> order_;                        // bounded geoms, ordered by the hierarchy
   std::vector<Eigen::Vector3d> box_lo_, box_hi_;  // per entry of order_
   std::vector<Node> nodes_;
 };

@@ -41,9 +41,10 @@ SceneProblems checkScene(const World& world, const SimConfig& config) {
   bool skybox = false;
   for (int t = 0; t < m->ntex; ++t) skybox = skybox || m->tex_type[t] == mjTEXTURE_SKYBOX;
   if (!skybox) {
-    out.warnings.push_back("the scene has no skybox texture: the sky renders black, and boundary estimation's sky test "
-                           "then finds no top (add <texture type=\"skybox\" builtin=\"gradient\" rgb1=\"0.45 0.62 0.88\" "
-                           "rgb2=\"0.9 0.94 1\" width=\"256\" height=\"256\"/> to its <asset>)");
+    out.warnings.push_back(
+        "the scene has no skybox texture: the sky renders black, and boundary estimation's sky test "
+        "then finds no top (add <texture type=\"skybox\" builtin=\"gradient\" rgb1=\"0.45 0.62 0.88\" "
+        "rgb2=\"0.9 0.94 1\" width=\"256\" height=\"256\"/> to its <asset>)");
   }
   // the path, every 0.5 m: terrain under it, and no object within a metre
   std::vector<Eigen::Vector2d> samples;

@@ -13,9 +13,9 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <sstream>
 #include <numeric>
 #include <set>
+#include <sstream>
 
 namespace terrain::sim {
 
@@ -33,7 +33,8 @@ std::string lower(std::string s) {
 
 // convex hull (counter-clockwise, Andrew's monotone chain)
 std::vector<Point2> hull(std::vector<Point2> p) {
-  std::sort(p.begin(), p.end(), [](const Point2& a, const Point2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(p.begin(), p.end(),
+            [](const Point2& a, const Point2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   p.erase(std::unique(p.begin(), p.end()), p.end());
   if (p.size() < 3) return p;
   const auto cross = [](const Point2& o, const Point2& a, const Point2& b) {
@@ -79,7 +80,8 @@ void loadImportPatterns(const fs::path& path, ImportOptions& options) {
   } catch (const YAML::Exception& e) {
     throw io::InputError(path.string() + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
   }
-  if (!root.IsMap()) throw io::InputError(path.string() + ": expected a map of class to patterns (building, crown, trunk, terrain)");
+  if (!root.IsMap())
+    throw io::InputError(path.string() + ": expected a map of class to patterns (building, crown, trunk, terrain)");
   for (const auto& kv : root) {
     const std::string cls = kv.first.as<std::string>();
     const int line = kv.second.Mark().line + 1;
@@ -88,12 +90,14 @@ void loadImportPatterns(const fs::path& path, ImportOptions& options) {
                            "' (building, crown, trunk, terrain)");
     }
     if (!kv.second.IsSequence() || kv.second.size() == 0) {
-      throw io::InputError(path.string() + ":" + std::to_string(line) + ": '" + cls + "' needs a list of name patterns");
+      throw io::InputError(path.string() + ":" + std::to_string(line) + ": '" + cls +
+                           "' needs a list of name patterns");
     }
     std::vector<std::string> list;
     for (const auto& p : kv.second) {
       if (!p.IsScalar() || p.as<std::string>().empty())
-        throw io::InputError(path.string() + ":" + std::to_string(p.Mark().line + 1) + ": a pattern must be a non-empty string");
+        throw io::InputError(path.string() + ":" + std::to_string(p.Mark().line + 1) +
+                             ": a pattern must be a non-empty string");
       list.push_back(lower(p.as<std::string>()));
     }
     options.patterns[cls] = list;
@@ -145,7 +149,8 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     }
   }
   if (terrain < 0) throw io::InputError(where + ": no plane or heightfield geom to be the terrain");
-  if (name(mjOBJ_GEOM, terrain).empty()) throw io::InputError(where + ": the terrain geom (geom " + std::to_string(terrain) + ") needs a name");
+  if (name(mjOBJ_GEOM, terrain).empty())
+    throw io::InputError(where + ": the terrain geom (geom " + std::to_string(terrain) + ") needs a name");
   scenes::SceneTruth& t = out_scene.truth;
   t.type = lower(world_path.stem().string());
   t.seed = 0;
@@ -174,9 +179,10 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     const std::string n = name(mjOBJ_GEOM, g);
     const std::string cls = classOf(g);
     if (cls.empty() || cls == "terrain" || n.empty()) {
-      out_scene.unclassified.push_back(n.empty() ? "geom " + std::to_string(g) + " (unnamed, in body '" +
-                                                       name(mjOBJ_BODY, m->geom_bodyid[g]) + "': give it a name to class it)"
-                                                 : n);
+      out_scene.unclassified.push_back(n.empty()
+                                           ? "geom " + std::to_string(g) + " (unnamed, in body '" +
+                                                 name(mjOBJ_BODY, m->geom_bodyid[g]) + "': give it a name to class it)"
+                                           : n);
       continue;
     }
     const double* s = m->geom_size + 3 * g;
@@ -185,12 +191,24 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     Eigen::Vector3d half;  // half extents in the geom's frame
     bool round = true;
     switch (m->geom_type[g]) {
-      case mjGEOM_BOX: half = {s[0], s[1], s[2]}, round = false; break;
-      case mjGEOM_SPHERE: half = {s[0], s[0], s[0]}; break;
-      case mjGEOM_CYLINDER: half = {s[0], s[0], s[1]}; break;
-      case mjGEOM_CAPSULE: half = {s[0], s[0], s[1] + s[0]}; break;
-      case mjGEOM_ELLIPSOID: half = {s[0], s[1], s[2]}; break;
-      default: half = Eigen::Vector3d::Constant(m->geom_rbound[g]); break;  // meshes and the rest: their bounding sphere
+      case mjGEOM_BOX:
+        half = {s[0], s[1], s[2]}, round = false;
+        break;
+      case mjGEOM_SPHERE:
+        half = {s[0], s[0], s[0]};
+        break;
+      case mjGEOM_CYLINDER:
+        half = {s[0], s[0], s[1]};
+        break;
+      case mjGEOM_CAPSULE:
+        half = {s[0], s[0], s[1] + s[0]};
+        break;
+      case mjGEOM_ELLIPSOID:
+        half = {s[0], s[1], s[2]};
+        break;
+      default:
+        half = Eigen::Vector3d::Constant(m->geom_rbound[g]);
+        break;  // meshes and the rest: their bounding sphere
     }
     Geom geom{g, n, cls, m->geom_bodyid[g], {}, c.z()};
     for (int i = 0; i < 3; ++i) geom.top += std::abs(R[6 + i]) * half[i];
@@ -198,11 +216,13 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     const int k = round ? 16 : 4;
     for (int i = 0; i < k; ++i) {
       const double a = round ? 2 * kPi * i / k : 0;
-      const Eigen::Vector3d local = round ? Eigen::Vector3d(half.x() * std::cos(a), half.y() * std::sin(a), 0)
-                                          : Eigen::Vector3d((i == 0 || i == 3) ? -half.x() : half.x(), i < 2 ? -half.y() : half.y(), 0);
+      const Eigen::Vector3d local =
+          round ? Eigen::Vector3d(half.x() * std::cos(a), half.y() * std::sin(a), 0)
+                : Eigen::Vector3d((i == 0 || i == 3) ? -half.x() : half.x(), i < 2 ? -half.y() : half.y(), 0);
       for (double z : {-half.z(), half.z()}) {
         const Eigen::Vector3d l(local.x(), local.y(), round ? 0.0 : z);
-        geom.outline.emplace_back(c.x() + R[0] * l.x() + R[1] * l.y() + R[2] * l.z(), c.y() + R[3] * l.x() + R[4] * l.y() + R[5] * l.z());
+        geom.outline.emplace_back(c.x() + R[0] * l.x() + R[1] * l.y() + R[2] * l.z(),
+                                  c.y() + R[3] * l.x() + R[4] * l.y() + R[5] * l.z());
       }
     }
     geom.outline = hull(geom.outline);
@@ -212,15 +232,20 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
   // objects: geoms of one class in one body whose outlines touch (within 0.1 m), joined
   std::vector<std::size_t> parent(geoms.size());
   std::iota(parent.begin(), parent.end(), 0);
-  const std::function<std::size_t(std::size_t)> root = [&](std::size_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
+  const std::function<std::size_t(std::size_t)> root = [&](std::size_t i) {
+    return parent[i] == i ? i : parent[i] = root(parent[i]);
+  };
   const auto touch = [](const Geom& a, const Geom& b) {
-    for (const auto& p : a.outline) if (distanceToPolygon(b.outline, p) <= 0.1) return true;
-    for (const auto& p : b.outline) if (distanceToPolygon(a.outline, p) <= 0.1) return true;
+    for (const auto& p : a.outline)
+      if (distanceToPolygon(b.outline, p) <= 0.1) return true;
+    for (const auto& p : b.outline)
+      if (distanceToPolygon(a.outline, p) <= 0.1) return true;
     return false;
   };
   for (std::size_t i = 0; i < geoms.size(); ++i) {
     for (std::size_t j = i + 1; j < geoms.size(); ++j) {
-      if (geoms[i].cls == geoms[j].cls && geoms[i].body == geoms[j].body && geoms[i].cls != "trunk" && touch(geoms[i], geoms[j]))
+      if (geoms[i].cls == geoms[j].cls && geoms[i].body == geoms[j].body && geoms[i].cls != "trunk" &&
+          touch(geoms[i], geoms[j]))
         parent[root(j)] = root(i);
     }
   }
@@ -253,8 +278,10 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
       const double dist = (centroid(groups[k].footprint) - c).norm();
       if (dist < best_d) best_d = dist, best = k;
     }
-    if (best == groups.size()) groups.push_back({"trunk", {i}, geoms[i].outline});
-    else groups[best].members.push_back(i);
+    if (best == groups.size())
+      groups.push_back({"trunk", {i}, geoms[i].outline});
+    else
+      groups[best].members.push_back(i);
   }
   std::map<std::string, int> count;
   std::set<std::string> ids;
@@ -266,7 +293,8 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     while (!ids.insert(id).second) id += "_" + std::to_string(++count[id]);
     o.id = id;
     o.top_height = -std::numeric_limits<double>::infinity();
-    for (std::size_t i : gr.members) o.geoms.push_back(geoms[i].name), o.top_height = std::max(o.top_height, geoms[i].top);
+    for (std::size_t i : gr.members)
+      o.geoms.push_back(geoms[i].name), o.top_height = std::max(o.top_height, geoms[i].top);
     for (const auto& p : gr.footprint) o.footprint.emplace_back(round3(p.x()), round3(p.y()));
     const Point2 c = centroid(gr.footprint);
     double base = terrainHeight(c.x(), c.y());
@@ -279,7 +307,8 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
   // the terrain's extent, and the objects' if the plane is infinite (size 0)
   if (half_x <= 0 || half_y <= 0) {
     double r = 20;
-    for (const Geom& g : geoms) for (const auto& p : g.outline) r = std::max({r, std::abs(p.x()) + 20, std::abs(p.y()) + 20});
+    for (const Geom& g : geoms)
+      for (const auto& p : g.outline) r = std::max({r, std::abs(p.x()) + 20, std::abs(p.y()) + 20});
     half_x = half_y = r;
   }
   t.extent = round3(std::max(half_x, half_y));
@@ -322,7 +351,8 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
   double path_room = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i + 1 < t.path.size(); ++i) {
     const Point2 a = t.path[i], b = t.path[i + 1];
-    if ((b - a).norm() < 1e-6) throw io::InputError("--path: points " + std::to_string(i) + " and " + std::to_string(i + 1) + " are the same");
+    if ((b - a).norm() < 1e-6)
+      throw io::InputError("--path: points " + std::to_string(i) + " and " + std::to_string(i + 1) + " are the same");
     const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.5)));
     for (int k = 0; k <= n; ++k) {
       const Point2 p = a + (b - a) * (static_cast<double>(k) / n);
@@ -339,13 +369,15 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
   // the scene: the world's XML, with a skybox and the robot where it has none
   tinyxml2::XMLDocument doc;
   const std::string text = io::readFile(world_path);
-  if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS) throw io::InputError(where + ": " + doc.ErrorStr());
+  if (doc.Parse(text.c_str(), text.size()) != tinyxml2::XML_SUCCESS)
+    throw io::InputError(where + ": " + doc.ErrorStr());
   tinyxml2::XMLElement* top = doc.FirstChildElement("mujoco");
   if (!top) throw io::InputError(where + ": no <mujoco> element");
   // files the world names (heightfields, meshes, textures, includes) are relative to its folder
   const std::function<bool(const tinyxml2::XMLElement*)> namesFiles = [&](const tinyxml2::XMLElement* e) {
     if (e->Attribute("file")) return true;
-    for (auto* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) if (namesFiles(c)) return true;
+    for (auto* c = e->FirstChildElement(); c; c = c->NextSiblingElement())
+      if (namesFiles(c)) return true;
     return false;
   };
   if (fs::absolute(out).parent_path().lexically_normal() != fs::absolute(world_path).parent_path().lexically_normal() &&
@@ -357,10 +389,13 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     for (auto* asset = top->FirstChildElement("asset"); asset; asset = asset->NextSiblingElement("asset")) {
       for (auto* h = asset->FirstChildElement("hfield"); h; h = h->NextSiblingElement("hfield")) {
         const char* file = h->Attribute("file");
-        if (file && name(mjOBJ_HFIELD, m->geom_dataid[terrain]) == (h->Attribute("name") ? h->Attribute("name") : "")) t.terrain.hfield_file = file;
+        if (file && name(mjOBJ_HFIELD, m->geom_dataid[terrain]) == (h->Attribute("name") ? h->Attribute("name") : ""))
+          t.terrain.hfield_file = file;
       }
     }
-    if (t.terrain.hfield_file.empty()) throw io::InputError(where + ": the terrain heightfield must come from a file (file=...) for the truth to name it");
+    if (t.terrain.hfield_file.empty())
+      throw io::InputError(where +
+                           ": the terrain heightfield must come from a file (file=...) for the truth to name it");
   }
   bool skybox = false;
   for (int i = 0; i < m->ntex; ++i) skybox = skybox || m->tex_type[i] == mjTEXTURE_SKYBOX;
@@ -396,7 +431,8 @@ ImportedScene importScene(const fs::path& world_path, const fs::path& out, const
     r->SetAttribute("pos", pos.str().c_str());
     const auto part = [&](const char* n, const char* type, const char* size, const char* at) {
       auto* g = r->InsertNewChildElement("geom");
-      g->SetAttribute("name", n), g->SetAttribute("type", type), g->SetAttribute("size", size), g->SetAttribute("pos", at);
+      g->SetAttribute("name", n), g->SetAttribute("type", type), g->SetAttribute("size", size),
+          g->SetAttribute("pos", at);
       g->SetAttribute("group", "3"), g->SetAttribute("contype", "0"), g->SetAttribute("conaffinity", "0");
       g->SetAttribute("rgba", "0.85 0.55 0.1 1");
     };

@@ -28,16 +28,16 @@ struct ImportOptions {
       {"terrain", {"ground", "terrain", "floor", "heightfield", "hfield"}},
   };
   std::vector<Eigen::Vector2d> path;  // [m] waypoints; empty: found
-  GeodeticOrigin origin{0, 0, 0};  // where the world origin lies (latitude, longitude [deg], altitude [m])
+  GeodeticOrigin origin{0, 0, 0};     // where the world origin lies (latitude, longitude [deg], altitude [m])
   double clearance = kPathClearance;  // [m] the least room between the robot's side and an object
 };
 
 struct ImportedScene {
-  std::string mjcf;              // the scene's MJCF text
+  std::string mjcf;  // the scene's MJCF text
   scenes::SceneTruth truth;
-  std::vector<std::string> added;        // what was added to the world ("a skybox", ...)
-  std::vector<std::string> unclassified; // geoms no pattern matched (unnamed ones by id and body)
-  double path_clearance = 0;             // [m] from the path's line to the nearest object footprint
+  std::vector<std::string> added;         // what was added to the world ("a skybox", ...)
+  std::vector<std::string> unclassified;  // geoms no pattern matched (unnamed ones by id and body)
+  double path_clearance = 0;              // [m] from the path's line to the nearest object footprint
 };
 
 // Reads `world` (MJCF, compiled by MuJoCo to place every geom), classes its geoms and derives the

@@ -3,8 +3,8 @@
 #include "rig/file_io.hpp"
 #include "rig/settings_io.hpp"
 
-#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <map>
@@ -107,10 +107,12 @@ std::vector<CameraMount> rigCameras(const CameraConfig& c) {
 
 void validate(const SimConfig& c) {
   require(c.robot.speed > 0 && c.robot.speed <= 30, "robot.speed", c.robot.speed, "(0, 30] m/s");
-  require(c.robot.mast_height >= 0.5 && c.robot.mast_height <= 5, "robot.mast_height", c.robot.mast_height, "[0.5, 5] m");
+  require(c.robot.mast_height >= 0.5 && c.robot.mast_height <= 5, "robot.mast_height", c.robot.mast_height,
+          "[0.5, 5] m");
   require(c.robot.wheelbase > 0 && c.robot.wheelbase <= 5, "robot.wheelbase", c.robot.wheelbase, "(0, 5] m");
   require(c.robot.track > 0 && c.robot.track <= 5, "robot.track", c.robot.track, "(0, 5] m");
-  require(c.lidar.rotation_hz >= 5 && c.lidar.rotation_hz <= 15, "lidar.rotation_hz", c.lidar.rotation_hz, "[5, 15] Hz");
+  require(c.lidar.rotation_hz >= 5 && c.lidar.rotation_hz <= 15, "lidar.rotation_hz", c.lidar.rotation_hz,
+          "[5, 15] Hz");
   require(c.lidar.firing_rate_hz >= 1000 && c.lidar.firing_rate_hz <= 100000, "lidar.firing_rate_hz",
           c.lidar.firing_rate_hz, "[1000, 100000] Hz");
   require(c.lidar.max_range > 0 && c.lidar.max_range <= 200, "lidar.max_range", c.lidar.max_range, "(0, 200] m");
@@ -122,12 +124,12 @@ void validate(const SimConfig& c) {
   require(c.lidar.height_cap > -5 && c.lidar.height_cap <= 200, "lidar.height_cap", c.lidar.height_cap, "(-5, 200] m");
   require(c.camera.width == 0 || (c.camera.width >= 16 && c.camera.width <= 4096), "camera.width", c.camera.width,
           "[16, 4096] px");
-  require(c.camera.height == 0 || (c.camera.height >= 16 && c.camera.height <= 4096), "camera.height",
-          c.camera.height, "[16, 4096] px");
+  require(c.camera.height == 0 || (c.camera.height >= 16 && c.camera.height <= 4096), "camera.height", c.camera.height,
+          "[16, 4096] px");
   require(std::isnan(c.camera.fovy_deg) || (c.camera.fovy_deg > 0 && c.camera.fovy_deg < 180), "camera.fovy_deg",
           c.camera.fovy_deg, "(0, 180) deg");
-  require(std::isnan(c.camera.pitch_deg) || (c.camera.pitch_deg >= -45 && c.camera.pitch_deg <= 45),
-          "camera.pitch_deg", c.camera.pitch_deg, "[-45, 45] deg");
+  require(std::isnan(c.camera.pitch_deg) || (c.camera.pitch_deg >= -45 && c.camera.pitch_deg <= 45), "camera.pitch_deg",
+          c.camera.pitch_deg, "[-45, 45] deg");
   if (c.camera.enabled) {
     if (c.camera.cameras.empty()) cameraRig(c.camera.rig);  // throws for an unknown name
     const std::vector<CameraMount> rig = rigCameras(c.camera);
@@ -136,15 +138,17 @@ void validate(const SimConfig& c) {
       if (rig[i].name.empty()) throw io::InputError("cameras[" + std::to_string(i) + "]: a camera needs a name");
       for (std::size_t j = 0; j < i; ++j) {
         if (rig[j].name == rig[i].name)
-          throw io::InputError("cameras[" + std::to_string(i) + "]: duplicate camera name '" + rig[i].name + "' (also cameras[" +
-                               std::to_string(j) + "])");
+          throw io::InputError("cameras[" + std::to_string(i) + "]: duplicate camera name '" + rig[i].name +
+                               "' (also cameras[" + std::to_string(j) + "])");
       }
       validateCamera(rig[i], field);
     }
   }
   require(c.gps.rate_hz > 0 && c.gps.rate_hz <= 100, "gps.rate_hz", c.gps.rate_hz, "(0, 100] Hz");
-  require(c.gps.horizontal_sigma >= 0 && c.gps.horizontal_sigma <= 100, "gps.horizontal_sigma", c.gps.horizontal_sigma, "[0, 100] m");
-  require(c.gps.vertical_sigma >= 0 && c.gps.vertical_sigma <= 100, "gps.vertical_sigma", c.gps.vertical_sigma, "[0, 100] m");
+  require(c.gps.horizontal_sigma >= 0 && c.gps.horizontal_sigma <= 100, "gps.horizontal_sigma", c.gps.horizontal_sigma,
+          "[0, 100] m");
+  require(c.gps.vertical_sigma >= 0 && c.gps.vertical_sigma <= 100, "gps.vertical_sigma", c.gps.vertical_sigma,
+          "[0, 100] m");
   require(c.gyro.rate_hz >= 100 && c.gyro.rate_hz <= 2000, "gyro.rate_hz", c.gyro.rate_hz, "[100, 2000] Hz");
   require(c.gyro.noise_sigma >= 0 && c.gyro.noise_sigma <= 1, "gyro.noise_sigma", c.gyro.noise_sigma, "[0, 1] rad/s");
   require(c.gyro.bias_sigma >= 0 && c.gyro.bias_sigma <= 1, "gyro.bias_sigma", c.gyro.bias_sigma, "[0, 1] rad/s");
@@ -241,26 +245,38 @@ std::string simConfigToJson(const SimConfig& c) {
   auto v3 = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
   json j;
   j["seed"] = c.seed;
-  j["robot"] = {{"speed", c.robot.speed}, {"mast_height", c.robot.mast_height}, {"wheelbase", c.robot.wheelbase},
+  j["robot"] = {{"speed", c.robot.speed},
+                {"mast_height", c.robot.mast_height},
+                {"wheelbase", c.robot.wheelbase},
                 {"track", c.robot.track}};
-  j["lidar"] = {{"calibration", c.lidar.calibration}, {"rotation_hz", c.lidar.rotation_hz},
+  j["lidar"] = {{"calibration", c.lidar.calibration},       {"rotation_hz", c.lidar.rotation_hz},
                 {"firing_rate_hz", c.lidar.firing_rate_hz}, {"max_range", c.lidar.max_range},
-                {"min_range", c.lidar.min_range}, {"range_noise", c.lidar.range_noise},
-                {"laser_bias", c.lidar.laser_bias}, {"dropout", c.lidar.dropout}, {"height_cap", c.lidar.height_cap}};
+                {"min_range", c.lidar.min_range},           {"range_noise", c.lidar.range_noise},
+                {"laser_bias", c.lidar.laser_bias},         {"dropout", c.lidar.dropout},
+                {"height_cap", c.lidar.height_cap}};
   json cameras = json::array();
   for (const auto& m : rigCameras(c.camera)) {
-    cameras.push_back({{"name", m.name}, {"position", v3(m.position)}, {"yaw_deg", m.yaw_deg},
-                       {"pitch_deg", m.pitch_deg}, {"roll_deg", m.roll_deg}, {"width", m.width},
-                       {"height", m.height}, {"fovy_deg", m.fovy_deg}});
+    cameras.push_back({{"name", m.name},
+                       {"position", v3(m.position)},
+                       {"yaw_deg", m.yaw_deg},
+                       {"pitch_deg", m.pitch_deg},
+                       {"roll_deg", m.roll_deg},
+                       {"width", m.width},
+                       {"height", m.height},
+                       {"fovy_deg", m.fovy_deg}});
   }
   j["camera"] = {{"enabled", c.camera.enabled}, {"rig", c.camera.cameras.empty() ? c.camera.rig : "custom"}};
   j["cameras"] = cameras;
-  j["gps"] = {{"rate_hz", c.gps.rate_hz}, {"horizontal_sigma", c.gps.horizontal_sigma},
-              {"vertical_sigma", c.gps.vertical_sigma}, {"antenna", v3(c.gps.antenna)}};
+  j["gps"] = {{"rate_hz", c.gps.rate_hz},
+              {"horizontal_sigma", c.gps.horizontal_sigma},
+              {"vertical_sigma", c.gps.vertical_sigma},
+              {"antenna", v3(c.gps.antenna)}};
   j["gyro"] = {{"rate_hz", c.gyro.rate_hz}, {"noise_sigma", c.gyro.noise_sigma}, {"bias_sigma", c.gyro.bias_sigma}};
   return j.dump();
 }
 
-std::filesystem::path dataPath(const std::string& relative) { return std::filesystem::path(TERRAIN_DATA_DIR) / relative; }
+std::filesystem::path dataPath(const std::string& relative) {
+  return std::filesystem::path(TERRAIN_DATA_DIR) / relative;
+}
 
 }  // namespace terrain::sim

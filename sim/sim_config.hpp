@@ -35,13 +35,13 @@ struct LidarConfig {
 // forward axis (counter-clockwise seen from above: 90 looks left), tilted up by pitch_deg; roll_deg
 // turns the camera about its optical axis (positive: the image's top edge to the camera's left).
 struct CameraMount {
-  std::string name = "front";       // unique within the rig
+  std::string name = "front";                // unique within the rig
   Eigen::Vector3d position{0.25, 0.0, 1.6};  // [m] vehicle frame, outside the robot's body
-  double yaw_deg = 0.0;             // [deg] in [-180, 180]
-  double pitch_deg = 8.0;           // [deg] upward tilt of the optical axis, in [-45, 45]
-  double roll_deg = 0.0;            // [deg] in [-45, 45]
-  int width = 640, height = 480;    // [px] in [16, 4096]
-  double fovy_deg = 75.0;           // [deg] vertical field of view, in (0, 180)
+  double yaw_deg = 0.0;                      // [deg] in [-180, 180]
+  double pitch_deg = 8.0;                    // [deg] upward tilt of the optical axis, in [-45, 45]
+  double roll_deg = 0.0;                     // [deg] in [-45, 45]
+  int width = 640, height = 480;             // [px] in [16, 4096]
+  double fovy_deg = 75.0;                    // [deg] vertical field of view, in (0, 180)
 };
 
 // The named camera rigs: "surround" (front, left, rear and right, 90 degrees apart, 91 degrees
@@ -56,7 +56,7 @@ struct CameraConfig {
   std::string rig = "surround";      // a named rig (cameraRig), used when `cameras` is empty
   std::vector<CameraMount> cameras;  // an explicit rig (YAML list `cameras`); replaces `rig`
   // set on every camera of the rig when given (0 or NaN: each camera's own)
-  int width = 0, height = 0;         // [px]
+  int width = 0, height = 0;                                    // [px]
   double fovy_deg = std::numeric_limits<double>::quiet_NaN();   // [deg]
   double pitch_deg = std::numeric_limits<double>::quiet_NaN();  // [deg]
 };
@@ -66,16 +66,16 @@ struct CameraConfig {
 std::vector<CameraMount> rigCameras(const CameraConfig& config);
 
 struct GpsConfig {
-  double rate_hz = 10.0;             // [Hz] in (0, 100]
-  double horizontal_sigma = 0.05;    // [m] 1-sigma per horizontal axis, >= 0
-  double vertical_sigma = 0.10;      // [m] 1-sigma, >= 0
+  double rate_hz = 10.0;                    // [Hz] in (0, 100]
+  double horizontal_sigma = 0.05;           // [m] 1-sigma per horizontal axis, >= 0
+  double vertical_sigma = 0.10;             // [m] 1-sigma, >= 0
   Eigen::Vector3d antenna{-0.3, 0.0, 1.9};  // [m] vehicle frame
 };
 
 struct GyroConfig {
-  double rate_hz = 200.0;        // [Hz] in [100, 2000]
-  double noise_sigma = 0.002;    // [rad/s] 1-sigma white noise per axis, >= 0
-  double bias_sigma = 0.0;       // [rad/s] 1-sigma of a constant per-axis bias, >= 0
+  double rate_hz = 200.0;      // [Hz] in [100, 2000]
+  double noise_sigma = 0.002;  // [rad/s] 1-sigma white noise per axis, >= 0
+  double bias_sigma = 0.0;     // [rad/s] 1-sigma of a constant per-axis bias, >= 0
 };
 
 struct SimConfig {

@@ -33,7 +33,8 @@ RigCalibration SimulatedRig::calibrationFor(const SimConfig& c, const GeodeticOr
     const Eigen::Matrix3d yaw = Eigen::AngleAxisd(m.yaw_deg * kDegToRad, Vector3::UnitZ()).toRotationMatrix();
     const Eigen::Matrix3d roll = Eigen::AngleAxisd(m.roll_deg * kDegToRad, Vector3::UnitZ()).toRotationMatrix();
     camera.vehicle_from_camera = Pose::Identity();
-    camera.vehicle_from_camera.linear() = m.yaw_deg == 0 && m.roll_deg == 0 ? forward : Eigen::Matrix3d(yaw * forward * roll);
+    camera.vehicle_from_camera.linear() =
+        m.yaw_deg == 0 && m.roll_deg == 0 ? forward : Eigen::Matrix3d(yaw * forward * roll);
     camera.vehicle_from_camera.translation() = m.position;
     cal.cameras.push_back(camera);
   }
@@ -53,14 +54,16 @@ SimulatedRig::SimulatedRig(std::shared_ptr<const World> world, const SimConfig& 
   validate(config_);
   if (frames_ < 1) throw io::InputError("frames = " + std::to_string(frames_) + " is out of range (allowed: >= 1)");
   calibration_ = calibrationFor(config_, world_->truth().origin);
-  const std::filesystem::path cal_file =
-      config_.lidar.calibration.empty() ? dataPath("calibration/hdl64e_s2.1-sztaki.yaml") : std::filesystem::path(config_.lidar.calibration);
+  const std::filesystem::path cal_file = config_.lidar.calibration.empty()
+                                             ? dataPath("calibration/hdl64e_s2.1-sztaki.yaml")
+                                             : std::filesystem::path(config_.lidar.calibration);
   rig::LaserCalibration lasers = rig::loadLaserCalibration(cal_file);
   caster_ = std::make_unique<RayCaster>(world_->model(), world_->data(), world_->robotBody());
   trajectory_ = std::make_unique<Trajectory>(*world_, world_->truth().path, config_.robot);
   lidar_ = std::make_unique<LidarSimulator>(*world_, *caster_, std::move(lasers), config_.lidar,
                                             calibration_.vehicle_from_lidar, config_.seed, config_.threads);
-  for (const CameraMount& m : rigCameras(config_.camera)) cameras_.push_back(std::make_unique<CameraRenderer>(*world_, m));
+  for (const CameraMount& m : rigCameras(config_.camera))
+    cameras_.push_back(std::make_unique<CameraRenderer>(*world_, m));
 }
 
 SimulatedRig::~SimulatedRig() = default;

@@ -36,7 +36,8 @@ World::World(const fs::path& scene_xml) : scene_path_(scene_xml) {
   if (!fs::exists(scene_xml)) throw io::InputError(scene_xml.string() + ": no such scene file");
   const fs::path truth_path = scenes::truthPathFor(scene_xml);
   if (!fs::exists(truth_path)) {
-    throw io::InputError(truth_path.string() + ": ground-truth sidecar is missing (generate scenes with 'terrain scenes generate')");
+    throw io::InputError(truth_path.string() +
+                         ": ground-truth sidecar is missing (generate scenes with 'terrain scenes generate')");
   }
   truth_ = scenes::loadTruth(truth_path);
   char error[1024] = "";

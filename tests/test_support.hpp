@@ -68,14 +68,17 @@ inline std::string boxScene(const std::string& name, const Eigen::Vector3d& cent
   return R"(<mujoco>
   <statistic extent="100" center="0 0 0"/>
   <visual><global offwidth="160" offheight="120"/><quality offsamples="0"/><map znear="0.002" zfar="3"/></visual>
-)" + std::string(sky ? R"(  <asset><texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.65 0.95" rgb2="0.7 0.8 1" width="64" height="64"/></asset>
+)" +
+         std::string(
+             sky ? R"(  <asset><texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.65 0.95" rgb2="0.7 0.8 1" width="64" height="64"/></asset>
 )"
-                     : "") +
+                 : "") +
          R"(  <default><geom contype="0" conaffinity="0"/></default>
   <worldbody>
     <light directional="true" pos="0 0 50" dir="0 0 -1"/>
     <geom name="ground" type="plane" size="60 60 1" rgba="0.3 0.5 0.3 1"/>
-    <geom name=")" + name + R"(" type="box" pos=")" + v3(centre) + R"(" size=")" + v3(half) +
+    <geom name=")" +
+         name + R"(" type="box" pos=")" + v3(centre) + R"(" size=")" + v3(half) +
          R"(" rgba="0.7 0.7 0.7 1" group="1"/>
     <body name="robot" mocap="true">
       <geom name="robot_chassis" type="box" size="0.5 0.35 0.2" pos="0 0 0.35" group="3"/>
@@ -110,9 +113,7 @@ inline scenes::SceneTruth boxTruth(const std::string& name, const Eigen::Vector3
 
 // A 20 m wall 1 m thick and 80 m long whose near face is at x = wall_x, the robot at the origin
 // facing it.
-inline std::string wallScene(double wall_x) {
-  return boxScene("wall", {wall_x + 0.5, 0, 10}, {0.5, 40, 10});
-}
+inline std::string wallScene(double wall_x) { return boxScene("wall", {wall_x + 0.5, 0, 10}, {0.5, 40, 10}); }
 
 inline scenes::SceneTruth wallTruth(double wall_x) {
   return boxTruth("wall", {wall_x + 0.5, 0, 10}, {0.5, 40, 10}, {{0, 0}, {1, 0}});
@@ -129,8 +130,7 @@ inline std::unique_ptr<Pipeline> twoPatches(int apart) {
   std::vector<MeshVertex> vertices;
   for (const int x0 : {0, apart}) {
     for (int x = x0; x < x0 + 3; ++x) {
-      for (int y = 0; y < 3; ++y)
-        addColumn(voxels, vertices, CellIndex(x, y), 5, 1.1f + 0.01f * y, VoxelLabel::Ground);
+      for (int y = 0; y < 3; ++y) addColumn(voxels, vertices, CellIndex(x, y), 5, 1.1f + 0.01f * y, VoxelLabel::Ground);
     }
   }
   SegmentationResult seg;

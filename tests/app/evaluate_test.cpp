@@ -68,10 +68,11 @@ TEST_F(EvaluateTest, ASceneChangedSinceTheRunIsRefused) {
     bytes[bytes.size() / 2] ^= 0x01;
     std::ofstream(file, std::ios::binary) << bytes;
     const fs::path err = *dir_ / "err.txt";
-    const int rc = sh(kCli + " evaluate --run " + copy.string() + " --out " + (copy / "again").string() + " > /dev/null 2> " +
-                      err.string());
+    const int rc = sh(kCli + " evaluate --run " + copy.string() + " --out " + (copy / "again").string() +
+                      " > /dev/null 2> " + err.string());
     EXPECT_EQ(WEXITSTATUS(rc), 2) << edited;
-    EXPECT_NE(io::readFile(err).find(std::string(edited) + ": changed since the run"), std::string::npos) << io::readFile(err);
+    EXPECT_NE(io::readFile(err).find(std::string(edited) + ": changed since the run"), std::string::npos)
+        << io::readFile(err);
     EXPECT_FALSE(fs::exists(copy / "again" / "report.json"));
   }
 }
@@ -83,14 +84,16 @@ TEST_F(EvaluateTest, DamagedStateGetsAClearError) {
     fs::remove_all(copy);
     fs::copy(run(), copy, fs::copy_options::recursive);
     std::ofstream(copy / "state" / file, std::ios::binary | std::ios::trunc) << content;
-    const int rc = sh(kCli + " evaluate --run " + copy.string() + " --out " + (*dir_ / "x").string() + " > " + log.string() + " 2>&1");
+    const int rc = sh(kCli + " evaluate --run " + copy.string() + " --out " + (*dir_ / "x").string() + " > " +
+                      log.string() + " 2>&1");
     return std::make_pair(rc, io::readFile(log));
   };
   const std::string bin = io::readFile(run() / "state" / "pipeline.bin");
   auto [rc1, msg1] = damaged("pipeline.bin", bin.substr(0, bin.size() / 2));
   EXPECT_EQ(rc1 >> 8, 2);
   EXPECT_NE(msg1.find("pipeline.bin"), std::string::npos) << msg1;
-  EXPECT_TRUE(msg1.find("cut short") != std::string::npos || msg1.find("do not fit in the file") != std::string::npos) << msg1;
+  EXPECT_TRUE(msg1.find("cut short") != std::string::npos || msg1.find("do not fit in the file") != std::string::npos)
+      << msg1;
   auto [rc2, msg2] = damaged("truth.bin", "garbage");
   EXPECT_NE(rc2, 0);
   EXPECT_NE(msg2.find("not a terrain run state"), std::string::npos) << msg2;

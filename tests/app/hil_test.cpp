@@ -6,8 +6,8 @@
 #include "rig/velodyne_source.hpp"
 #include "tests/test_support.hpp"
 
-#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <thread>
@@ -29,9 +29,11 @@ void expectSameScores(const nlohmann::json& a, const nlohmann::json& b) {
   const double va = a["voxels"].get<double>(), vb = b["voxels"].get<double>();
   EXPECT_NEAR(va, vb, 0.002 * va);
   for (const char* m : {"gmrf_icm", "gmrf_mincut", "histogram"}) {
-    EXPECT_NEAR(a["ground_segmentation"][m]["f1"].get<double>(), b["ground_segmentation"][m]["f1"].get<double>(), 0.005) << m;
+    EXPECT_NEAR(a["ground_segmentation"][m]["f1"].get<double>(), b["ground_segmentation"][m]["f1"].get<double>(), 0.005)
+        << m;
   }
-  EXPECT_NEAR(a["height_recovery"]["after"]["mae_m"].get<double>(), b["height_recovery"]["after"]["mae_m"].get<double>(), 0.2);
+  EXPECT_NEAR(a["height_recovery"]["after"]["mae_m"].get<double>(),
+              b["height_recovery"]["after"]["mae_m"].get<double>(), 0.2);
   EXPECT_NEAR(a["boundary_coverage"].get<double>(), b["boundary_coverage"].get<double>(), 0.01);
 }
 
@@ -39,9 +41,11 @@ class HilTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new test::TempDir();
-    ASSERT_EQ(0, sh(kCli + " record --scene " + kScene + " --frames 12 --pcap --out " + ds().string() + " > /dev/null"));
+    ASSERT_EQ(0,
+              sh(kCli + " record --scene " + kScene + " --frames 12 --pcap --out " + ds().string() + " > /dev/null"));
     ASSERT_TRUE(fs::exists(ds() / "lidar.pcap"));
-    ASSERT_EQ(0, sh(kCli + " reconstruct --input " + ds().string() + " --out " + (*dir_ / "from_dataset").string() + " > /dev/null"));
+    ASSERT_EQ(0, sh(kCli + " reconstruct --input " + ds().string() + " --out " + (*dir_ / "from_dataset").string() +
+                    " > /dev/null"));
   }
   static void TearDownTestSuite() { delete dir_; }
   static fs::path ds() { return *dir_ / "ds"; }
@@ -75,8 +79,8 @@ TEST_F(HilTest, LoopbackUdpStreamScoresLikeTheDataset) {
     if (fs::exists(log) && io::readFile(log).find("listening") != std::string::npos) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  EXPECT_EQ(0, sh(kCli + " stream --pcap " + (ds() / "lidar.pcap").string() + " --to 127.0.0.1:" + std::to_string(port) +
-                  " > /dev/null 2>&1"));
+  EXPECT_EQ(0, sh(kCli + " stream --pcap " + (ds() / "lidar.pcap").string() +
+                  " --to 127.0.0.1:" + std::to_string(port) + " > /dev/null 2>&1"));
   receiver.join();
   ASSERT_TRUE(fs::exists(out / "report.json")) << io::readFile(log);
   expectSameScores(report(*dir_ / "from_dataset"), report(out));
@@ -104,7 +108,8 @@ TEST_F(HilTest, SimulatedRigWithAStreamedLidarScoresLikeTheInProcessRun) {
     if (fs::exists(log) && io::readFile(log).find("listening") != std::string::npos) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  EXPECT_EQ(0, sh(kCli + " stream --scene " + scene.string() + " --frames 8 --to 127.0.0.1:" + std::to_string(port) + " > /dev/null 2>&1"));
+  EXPECT_EQ(0, sh(kCli + " stream --scene " + scene.string() + " --frames 8 --to 127.0.0.1:" + std::to_string(port) +
+                  " > /dev/null 2>&1"));
   receiver.join();
   ASSERT_EQ(0, sh(kCli + " run --scenario urban --seed 1 --frames 8 --out " + ref.string() + " > /dev/null 2>&1"));
   ASSERT_TRUE(fs::exists(out / "report.json")) << io::readFile(log);
@@ -118,7 +123,8 @@ TEST_F(HilTest, BadLidarArgumentsGetAClearError) {
   EXPECT_NE(io::readFile(log).find("expected pcap:FILE or udp:HOST:PORT"), std::string::npos);
   EXPECT_NE(0, sh(base + " --lidar pcap:" + (ds() / "lasers.yaml").string() + " 2> " + log.string()));
   EXPECT_NE(io::readFile(log).find("not a pcap capture"), std::string::npos) << io::readFile(log);
-  EXPECT_NE(0, sh(base + " --lidar pcap:" + (ds() / "lidar.pcap").string() + " --calibration " + kScene + " 2> " + log.string()));
+  EXPECT_NE(0, sh(base + " --lidar pcap:" + (ds() / "lidar.pcap").string() + " --calibration " + kScene + " 2> " +
+                  log.string()));
   EXPECT_NE(io::readFile(log).find("terrain: error:"), std::string::npos) << io::readFile(log);
   EXPECT_FALSE(fs::exists(*dir_ / "bad" / "report.json"));
 }

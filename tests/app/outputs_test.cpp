@@ -15,7 +15,6 @@
 namespace terrain {
 namespace {
 
-
 TEST(OutputsTest, AMeshWiderThanTheImageLimitIsDrawnCoarserWithAWarning) {
   test::TempDir dir;
   // 2 km: 10,003 cells across, 3 cells a pixel

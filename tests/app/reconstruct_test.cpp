@@ -52,7 +52,8 @@ TEST(ReconstructTest, AFormatOneDatasetStillReconstructs) {
                   ds.string() + " > /dev/null"));
   ASSERT_EQ(0, sh(kCli + " reconstruct --input " + ds.string() + " --out " + out2.string() + " > /dev/null 2>&1"));
   // rewrite it as format 1 wrote it
-  for (const auto& e : fs::directory_iterator(ds / "camera" / "front")) fs::rename(e.path(), ds / "camera" / e.path().filename());
+  for (const auto& e : fs::directory_iterator(ds / "camera" / "front"))
+    fs::rename(e.path(), ds / "camera" / e.path().filename());
   fs::remove(ds / "camera" / "front");
   auto cal = nlohmann::json::parse(io::readFile(ds / "calibration.json"));
   cal["camera"] = cal["cameras"][0];

@@ -47,7 +47,8 @@ TEST(RunTest, AnInterruptedCommandLeavesTheOldOutputAsItWas) {
   const std::string cli = test::kCli;
   const fs::path run = dir / "run", ds = dir / "ds", rec = dir / "rec";
   ASSERT_EQ(0, test::sh(cli + " run --frames 3 --cameras forward --out " + run.string() + " > /dev/null 2>&1"));
-  ASSERT_EQ(0, test::sh(cli + " record --scene " + test::kUrbanScene + " --frames 3 --out " + ds.string() + " > /dev/null 2>&1"));
+  ASSERT_EQ(0, test::sh(cli + " record --scene " + test::kUrbanScene + " --frames 3 --out " + ds.string() +
+                        " > /dev/null 2>&1"));
   ASSERT_EQ(0, test::sh(cli + " reconstruct --input " + ds.string() + " --out " + rec.string() + " > /dev/null 2>&1"));
   const auto snapshot = [](const fs::path& d) {
     std::map<std::string, std::string> files;
@@ -60,21 +61,23 @@ TEST(RunTest, AnInterruptedCommandLeavesTheOldOutputAsItWas) {
   // the command in the background, the signal after a few seconds (it needs a minute or more)
   const auto interrupt = [&](const std::string& args, const char* signal) {
     const std::string rc = (dir / "rc").string();
-    test::sh("(" + cli + " " + args + " > /dev/null 2> " + (dir / "err").string() + " & p=$!; sleep 6; kill -" + signal +
-             " $p; wait $p; echo $? > " + rc + ")");
+    test::sh("(" + cli + " " + args + " > /dev/null 2> " + (dir / "err").string() + " & p=$!; sleep 6; kill -" +
+             signal + " $p; wait $p; echo $? > " + rc + ")");
     return std::stoi(io::readFile(rc));
   };
   EXPECT_EQ(interrupt("run --frames 400 --cameras forward --force --out " + run.string(), "INT"), 130);
   EXPECT_NE(io::readFile(dir / "err").find("interrupted (SIGINT)"), std::string::npos) << io::readFile(dir / "err");
   EXPECT_EQ(snapshot(run), before_run);
-  EXPECT_EQ(interrupt("record --scene " + test::kUrbanScene + " --frames 400 --force --out " + ds.string(), "TERM"), 143);
+  EXPECT_EQ(interrupt("record --scene " + test::kUrbanScene + " --frames 400 --force --out " + ds.string(), "TERM"),
+            143);
   EXPECT_EQ(snapshot(ds), before_ds);
   for (const auto& e : fs::directory_iterator(dir.path())) {
     EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
   }
   // an input inside the output it would replace is refused before anything is written
   EXPECT_EQ(WEXITSTATUS(test::sh(cli + " reconstruct --input " + ds.string() + " --out " + dir.path().string() +
-                                 " --force > /dev/null 2>&1")), 2);
+                                 " --force > /dev/null 2>&1")),
+            2);
   EXPECT_EQ(snapshot(ds), before_ds);
 }
 

@@ -51,7 +51,8 @@ struct Rays {
 const Rays& sweepRays() {
   static Rays rays = [] {
     const auto& w = urbanWorld();
-    const rig::LaserCalibration lasers = rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+    const rig::LaserCalibration lasers =
+        rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
     const Eigen::Vector2d start = w.truth().path.front();
     const Vector3 sensor(start.x(), start.y(), w.terrainHeight(start.x(), start.y()) + 1.8);
     Rays r;
@@ -75,7 +76,8 @@ void BM_LidarRays_MjRay(benchmark::State& state) {
   std::size_t i = 0;
   for (auto _ : state) {
     // a slice of the sweep per iteration: brute force is slow
-    for (int k = 0; k < 2000; ++k, i = (i + 97) % rays.dir.size()) benchmark::DoNotOptimize(caster.castReference(rays.origin[i], rays.dir[i]));
+    for (int k = 0; k < 2000; ++k, i = (i + 97) % rays.dir.size())
+      benchmark::DoNotOptimize(caster.castReference(rays.origin[i], rays.dir[i]));
   }
   state.SetItemsProcessed(state.iterations() * 2000);
 }
@@ -89,7 +91,8 @@ void BM_LidarRays_Accelerated(benchmark::State& state) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   for (auto _ : state) {
     std::vector<int> hits(rays.dir.size());
-    tbb::parallel_for(std::size_t{0}, rays.dir.size(), [&](std::size_t k) { hits[k] = caster.cast(rays.origin[k], rays.dir[k]).geom; });
+    tbb::parallel_for(std::size_t{0}, rays.dir.size(),
+                      [&](std::size_t k) { hits[k] = caster.cast(rays.origin[k], rays.dir[k]).geom; });
     benchmark::DoNotOptimize(hits.data());
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(rays.dir.size()));
@@ -138,13 +141,19 @@ void BM_VoxelInsert(benchmark::State& state) {
   std::uint32_t frame = 0;
   for (; frame < 10; ++frame) {
     const std::vector<Point3> p = moved(0.5 * frame);
-    if (optimised) map.insert(p, frame); else insertHashed(p, frame);
+    if (optimised)
+      map.insert(p, frame);
+    else
+      insertHashed(p, frame);
   }
   for (auto _ : state) {
     state.PauseTiming();
     const std::vector<Point3> p = moved(0.5 * frame);
     state.ResumeTiming();
-    if (optimised) map.insert(p, frame); else insertHashed(p, frame);
+    if (optimised)
+      map.insert(p, frame);
+    else
+      insertHashed(p, frame);
     ++frame;
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(sweep.size()));
@@ -165,7 +174,8 @@ VoxelMap& bigMap() {
         pts.emplace_back(px, py, 0.5 * std::sin(px / 15) + 0.3 * std::cos(py / 9) + 0.01 * rng.normal());
         // walls every 20 m, 15 voxels high
         if (x % 100 == 0 || y % 100 == 0) {
-          for (int z = 1; z < 5; ++z) pts.emplace_back(px, py, 0.5 * std::sin(px / 15) + 0.3 * std::cos(py / 9) + z * 0.2);
+          for (int z = 1; z < 5; ++z)
+            pts.emplace_back(px, py, 0.5 * std::sin(px / 15) + 0.3 * std::cos(py / 9) + z * 0.2);
         }
       }
     }
@@ -247,8 +257,8 @@ void BM_Segmentation_NaiveHashMap(benchmark::State& state) {
   for (auto _ : state) {
     std::unordered_map<std::uint64_t, std::pair<float, std::uint8_t>> voxels;
     auto key = [](const VoxelIndex& i) {
-      return (static_cast<std::uint64_t>(i.x() + (1 << 20)) << 42) | (static_cast<std::uint64_t>(i.y() + (1 << 20)) << 21) |
-             static_cast<std::uint64_t>(i.z() + (1 << 20));
+      return (static_cast<std::uint64_t>(i.x() + (1 << 20)) << 42) |
+             (static_cast<std::uint64_t>(i.y() + (1 << 20)) << 21) | static_cast<std::uint64_t>(i.z() + (1 << 20));
     };
     std::vector<double> heights;
     for (const auto& v : map.voxels()) voxels[key(v.index)] = {v.height, 0}, heights.push_back(v.height);
@@ -314,15 +324,18 @@ void BM_CameraRig(benchmark::State& state) {
 BENCHMARK(BM_CameraRig)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_KittiScanSegmentation(benchmark::State& state) {
-  static const rig::KittiScan scan = rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
-  for (auto _ : state) benchmark::DoNotOptimize(eval::segmentScan(scan.points, VoxelMapConfig{}, GroundSegmentationConfig{}).data());
+  static const rig::KittiScan scan =
+      rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
+  for (auto _ : state)
+    benchmark::DoNotOptimize(eval::segmentScan(scan.points, VoxelMapConfig{}, GroundSegmentationConfig{}).data());
 }
 BENCHMARK(BM_KittiScanSegmentation)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // decoding one second of HDL-64E traffic (10 sweeps, every laser returning)
 void BM_PacketDecode(benchmark::State& state) {
   static const auto packets = [] {
-    const rig::LaserCalibration lasers = rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+    const rig::LaserCalibration lasers =
+        rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
     const int n = 2083;
     rig::velodyne::PacketEncoder encoder(lasers, n);
     std::vector<rig::velodyne::TimedPacket> out;
@@ -336,15 +349,17 @@ void BM_PacketDecode(benchmark::State& state) {
           Vector3 o, d;
           rig::laserRay(l, a, o, d);
           const Vector3 p = o + (5.0 + 0.37 * l.id + 0.01 * (j % 97)) * d;
-          sweep.points.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), 50.0f,
-                                  static_cast<std::uint16_t>(l.id), static_cast<float>(a), sweep.start_time + 0.1 * j / n});
+          sweep.points.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()),
+                                  50.0f, static_cast<std::uint16_t>(l.id), static_cast<float>(a),
+                                  sweep.start_time + 0.1 * j / n});
         }
       }
       encoder.addSweep(sweep, out);
     }
     return out;
   }();
-  static const rig::LaserCalibration lasers = rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+  static const rig::LaserCalibration lasers =
+      rig::loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
   for (auto _ : state) {
     rig::velodyne::SweepAssembler a(lasers);
     std::vector<LidarSweep> sweeps;
@@ -404,10 +419,12 @@ void BM_LongRunMemory(benchmark::State& state) {
     }
     const double added = static_cast<double>(r.back().voxels - r[99].voxels);
     state.counters["bytes_per_added_voxel"] =
-        added > 0 ? (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[99].resident_bytes)) / added : 0.0;
+        added > 0 ? (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[99].resident_bytes)) / added
+                  : 0.0;
     // the last 300 frames
     const std::size_t from = r.size() - 301;
-    state.counters["standing_growth_mb"] = (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[from].resident_bytes)) / 1e6;
+    state.counters["standing_growth_mb"] =
+        (static_cast<double>(r.back().resident_bytes) - static_cast<double>(r[from].resident_bytes)) / 1e6;
     state.counters["standing_new_voxels"] = static_cast<double>(r.back().voxels - r[from].voxels);
     state.counters["voxels"] = static_cast<double>(r.back().voxels);
     // boundary estimation and crown samples per frame, early and late in the run (the map grows)
@@ -430,13 +447,16 @@ class Collector : public benchmark::ConsoleReporter {
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
     for (const auto& r : runs) {
-      if (r.run_type == Run::RT_Aggregate && r.aggregate_name == "median") medians[r.benchmark_name().substr(0, r.benchmark_name().rfind('_'))] = r;
+      if (r.run_type == Run::RT_Aggregate && r.aggregate_name == "median")
+        medians[r.benchmark_name().substr(0, r.benchmark_name().rfind('_'))] = r;
       if (r.run_type == Run::RT_Iteration && r.repetitions <= 1) medians[r.benchmark_name()] = r;
     }
   }
 };
 
-double ms(const benchmark::BenchmarkReporter::Run& r) { return r.GetAdjustedRealTime() * (r.time_unit == benchmark::kMillisecond ? 1.0 : 1e-6); }
+double ms(const benchmark::BenchmarkReporter::Run& r) {
+  return r.GetAdjustedRealTime() * (r.time_unit == benchmark::kMillisecond ? 1.0 : 1e-6);
+}
 double perSecond(const benchmark::BenchmarkReporter::Run& r) {
   auto it = r.counters.find("items_per_second");
   return it == r.counters.end() ? 0.0 : static_cast<double>(it->second);
@@ -462,53 +482,80 @@ int main(int argc, char** argv) {
                   perSecond(*r) / 1e3, ">= 1333 k/s", ref ? perSecond(*r) / perSecond(*ref) : 0.0);
     }
   }
-  if (ref) std::printf("%-44s %10.0f k/s %16s %12s\n", "lidar rays, brute-force mj_ray (baseline)", perSecond(*ref) / 1e3, "", "1.0x");
+  if (ref)
+    std::printf("%-44s %10.0f k/s %16s %12s\n", "lidar rays, brute-force mj_ray (baseline)", perSecond(*ref) / 1e3, "",
+                "1.0x");
   const auto* naive = get("BM_Segmentation_NaiveHashMap");
   if (const auto* r = get("BM_Segmentation/0")) {
-    std::printf("%-44s %11.1f ms %16s %11.1fx\n", ("segmentation ICM, " + std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels").c_str(), ms(*r), "<= 50 ms", naive ? ms(*naive) / ms(*r) : 0.0);
-    std::printf("%-44s %11.1f B %16s %12s\n", "voxel map memory per voxel", static_cast<double>(r->counters.at("bytes_per_voxel")), "<= 64 B", "");
+    std::printf(
+        "%-44s %11.1f ms %16s %11.1fx\n",
+        ("segmentation ICM, " + std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels").c_str(),
+        ms(*r), "<= 50 ms", naive ? ms(*naive) / ms(*r) : 0.0);
+    std::printf("%-44s %11.1f B %16s %12s\n", "voxel map memory per voxel",
+                static_cast<double>(r->counters.at("bytes_per_voxel")), "<= 64 B", "");
   }
   if (const auto* r = get("BM_SegmentationFirstCall"))
-    std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation ICM, same map, fresh memory", ms(*r), "", naive ? ms(*naive) / ms(*r) : 0.0);
-  if (const auto* r = get("BM_Segmentation/1")) std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation min-cut, same map", ms(*r), "<= 250 ms", naive ? ms(*naive) / ms(*r) : 0.0);
-  if (naive) std::printf("%-44s %11.1f ms %16s %12s\n", "segmentation, naive hash map (baseline)", ms(*naive), "", "1.0x");
+    std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation ICM, same map, fresh memory", ms(*r), "",
+                naive ? ms(*naive) / ms(*r) : 0.0);
+  if (const auto* r = get("BM_Segmentation/1"))
+    std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation min-cut, same map", ms(*r), "<= 250 ms",
+                naive ? ms(*naive) / ms(*r) : 0.0);
+  if (naive)
+    std::printf("%-44s %11.1f ms %16s %12s\n", "segmentation, naive hash map (baseline)", ms(*naive), "", "1.0x");
   if (const auto* r = get("BM_SegmentationIncremental")) {
-    std::printf("%-44s %11.1f ms %16s %12s\n",
-                ("incremental update, " + std::to_string(static_cast<long>(r->counters.at("new_voxels"))) + " new voxels").c_str(),
-                ms(*r), "<= 10 ms", "");
+    std::printf(
+        "%-44s %11.1f ms %16s %12s\n",
+        ("incremental update, " + std::to_string(static_cast<long>(r->counters.at("new_voxels"))) + " new voxels")
+            .c_str(),
+        ms(*r), "<= 10 ms", "");
   }
   if (const auto* r = get("BM_VoxelInsert/1/")) {
     const auto* base = get("BM_VoxelInsert/0/");
-    std::printf("%-44s %11.2f ms %16s %11.1fx\n", ("voxel insertion, one sweep of " + std::to_string(static_cast<long>(r->counters.at("points"))) + " points").c_str(),
-                ms(*r), "", base ? ms(*base) / ms(*r) : 0.0);
-    if (base) std::printf("%-44s %11.2f ms %16s %12s\n", "voxel insertion, std::unordered_map (baseline)", ms(*base), "", "1.0x");
+    std::printf(
+        "%-44s %11.2f ms %16s %11.1fx\n",
+        ("voxel insertion, one sweep of " + std::to_string(static_cast<long>(r->counters.at("points"))) + " points")
+            .c_str(),
+        ms(*r), "", base ? ms(*base) / ms(*r) : 0.0);
+    if (base)
+      std::printf("%-44s %11.2f ms %16s %12s\n", "voxel insertion, std::unordered_map (baseline)", ms(*base), "",
+                  "1.0x");
   }
-  if (const auto* r = get("BM_CameraRender")) std::printf("%-44s %10.1f f/s %16s %12s\n", "camera 640x480 (RGB, depth, segmentation)", perSecond(*r), ">= 10 f/s", "");
+  if (const auto* r = get("BM_CameraRender"))
+    std::printf("%-44s %10.1f f/s %16s %12s\n", "camera 640x480 (RGB, depth, segmentation)", perSecond(*r), ">= 10 f/s",
+                "");
   if (const auto* r = get("BM_CameraRig")) {
-    std::printf("%-44s %10.1f f/s %16s %12s\n",
-                ("camera rig, " + std::to_string(static_cast<int>(r->counters.at("cameras"))) + " cameras at 640x480").c_str(),
-                perSecond(*r), "", "");
+    std::printf(
+        "%-44s %10.1f f/s %16s %12s\n",
+        ("camera rig, " + std::to_string(static_cast<int>(r->counters.at("cameras"))) + " cameras at 640x480").c_str(),
+        perSecond(*r), "", "");
   }
   if (const auto* r = get("BM_PipelineStreaming")) {
-    std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (median)", static_cast<double>(r->counters.at("frame_median_ms")),
-                "<= 100 ms", "");
-    std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (p95)", static_cast<double>(r->counters.at("frame_p95_ms")), "", "");
+    std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (median)",
+                static_cast<double>(r->counters.at("frame_median_ms")), "<= 100 ms", "");
+    std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (p95)",
+                static_cast<double>(r->counters.at("frame_p95_ms")), "", "");
   }
   if (const auto* r = get("BM_PacketDecode")) {
     // the real sensor sends 20,833 firings/s, 6 a packet
-    std::printf("%-44s %10.0f k/s %16s %11.1fx\n", "HDL-64E packets decoded into sweeps", perSecond(*r) / 1e3, ">= 3.5 k/s",
-                perSecond(*r) / (20833.3 / 6));
+    std::printf("%-44s %10.0f k/s %16s %11.1fx\n", "HDL-64E packets decoded into sweeps", perSecond(*r) / 1e3,
+                ">= 3.5 k/s", perSecond(*r) / (20833.3 / 6));
   }
   if (const auto* r = get("BM_LongRunMemory"); r && r->counters.count("voxels")) {
-    std::printf("%-44s %11.1f B %16s %12s\n", ("1000 frames: resident memory per added voxel (" +
-                std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels)").c_str(),
+    std::printf("%-44s %11.1f B %16s %12s\n",
+                ("1000 frames: resident memory per added voxel (" +
+                 std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels)")
+                    .c_str(),
                 static_cast<double>(r->counters.at("bytes_per_added_voxel")), "", "");
-    std::printf("%-44s %11.2f MB %15s %12s\n", ("1000 frames: growth over the last 300, " +
-                std::to_string(static_cast<long>(r->counters.at("standing_new_voxels"))) + " new voxels").c_str(),
+    std::printf("%-44s %11.2f MB %15s %12s\n",
+                ("1000 frames: growth over the last 300, " +
+                 std::to_string(static_cast<long>(r->counters.at("standing_new_voxels"))) + " new voxels")
+                    .c_str(),
                 static_cast<double>(r->counters.at("standing_growth_mb")), "only with voxels", "");
     std::printf("%-44s %5.1f / %4.1f ms %16s %12s\n", "1000 frames: estimation, first / last 100",
-                static_cast<double>(r->counters.at("estimation_first100_ms")), static_cast<double>(r->counters.at("estimation_last100_ms")), "", "");
+                static_cast<double>(r->counters.at("estimation_first100_ms")),
+                static_cast<double>(r->counters.at("estimation_last100_ms")), "", "");
   }
-  if (const auto* r = get("BM_KittiScanSegmentation")) std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation", ms(*r), "<= 10 ms", "");
+  if (const auto* r = get("BM_KittiScanSegmentation"))
+    std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation", ms(*r), "<= 10 ms", "");
   return 0;
 }

@@ -144,7 +144,8 @@ TEST(BoundaryDetectionTest, FoliageMaskFollowsThePerPixelRule) {
   for (int r = 0; r < 256; ++r) {
     for (int x = 0; x < rgb.cols; ++x) {
       const int g = x % 256, b = (x / 256) * 120;
-      rgb.at<cv::Vec3b>(r, x) = cv::Vec3b(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b));
+      rgb.at<cv::Vec3b>(r, x) =
+          cv::Vec3b(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b));
     }
   }
   for (const int margin : {0, 10, 40}) {
@@ -240,7 +241,8 @@ TEST(BoundaryEstimationTest, SkyTestSkipsObjectsThatRunOffTheImage) {
   TerrainMesh mesh;
   mesh.update(map, {0});
   const cv::Mat none = cv::Mat::zeros(480, 640, CV_8UC1);
-  for (int frame = 0; frame < 3; ++frame) estimateBoundaries(mesh, map, none, k, world_from_camera, BoundaryEstimationConfig{});
+  for (int frame = 0; frame < 3; ++frame)
+    estimateBoundaries(mesh, map, none, k, world_from_camera, BoundaryEstimationConfig{});
   EXPECT_EQ(mesh.vertices()[0].outcomes[static_cast<std::size_t>(EstimateOutcome::NoTopBoundary)], 3);
   EXPECT_STREQ(outcomeName(EstimateOutcome::NoTopBoundary), "no_top_boundary");
   MeshVertex full;
@@ -430,7 +432,9 @@ TEST(BoundaryEstimationTest, AnObjectThatEndsInSkyBelowItsTopmostBoundaryIsNotRa
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
   const Pose world_from_camera = northCamera();
   const Pose camera_from_world = world_from_camera.inverse();
-  const auto row = [&](double z) { return static_cast<int>(project(k, camera_from_world * Point3(3.1, 20.1, z))->y()); };
+  const auto row = [&](double z) {
+    return static_cast<int>(project(k, camera_from_world * Point3(3.1, 20.1, z))->y());
+  };
   const cv::Scalar sky(120, 160, 230), leaves(40, 110, 35), bark(90, 60, 40), facade(150, 150, 150);
   cv::Mat boundary(480, 640, CV_8UC1, cv::Scalar(0));
   boundary.row(row(12.0)).setTo(255);
@@ -467,9 +471,8 @@ TEST(BoundaryEstimationTest, AnObjectThatEndsInSkyBelowItsTopmostBoundaryIsNotRa
     cfg.require_sky_above = c.sky_test;
     const auto stats = estimateBoundaries(mesh, map, boundary, k, world_from_camera, cfg, rgb);
     const MeshVertex& m = mesh.vertices()[0];
-    const std::string what = std::string(c.crown ? "crown" : "facade") + (c.on_bark ? " on bark" : "") +
-                             ", sky test " + std::to_string(c.sky_test) + ", gap " +
-                             std::to_string(static_cast<int>(c.gap));
+    const std::string what = std::string(c.crown ? "crown" : "facade") + (c.on_bark ? " on bark" : "") + ", sky test " +
+                             std::to_string(c.sky_test) + ", gap " + std::to_string(static_cast<int>(c.gap));
     EXPECT_EQ(stats.projected, 1) << what;
     EXPECT_EQ(stats.by_foliage, 0) << what;
     if (c.height == 0) {

@@ -48,7 +48,8 @@ struct Roadside {
     const Point3 o = world_from_camera.translation();
     for (int v = 0; v < k.height; ++v) {
       for (int u = 0; u < k.width; ++u) {
-        const Vector3 d = (world_from_camera.linear() * Vector3((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1)).normalized();
+        const Vector3 d =
+            (world_from_camera.linear() * Vector3((u + 0.5 - k.cx) / k.fx, (v + 0.5 - k.cy) / k.fy, 1)).normalized();
         const Vector3 oc = o - crown;
         const double b = oc.dot(d), c = oc.squaredNorm() - radius * radius;
         cv::Vec3b& px = rgb.at<cv::Vec3b>(v, u);

@@ -8,7 +8,7 @@
 namespace terrain {
 namespace {
 
-constexpr double kCell = 0.2;  // [m]
+constexpr double kCell = 0.2;          // [m]
 const cv::Vec3b kSky(120, 160, 230);   // passes the sky test: blue well above red, not below green, bright
 const cv::Vec3b kGrey(100, 100, 100);  // does not
 

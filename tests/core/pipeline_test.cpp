@@ -54,7 +54,8 @@ TEST(PoseEstimationTest, GpsAndGyroFusionTracksTheTruePose) {
       if (p.time > poses.finalUntil()) continue;
       const Pose est = poses.worldFromVehicle(p.time);
       worst_pos = std::max(worst_pos, (est.translation() - p.world_from_vehicle.translation()).norm());
-      worst_angle = std::max(worst_angle, Eigen::AngleAxisd(est.linear().transpose() * p.world_from_vehicle.linear()).angle());
+      worst_angle =
+          std::max(worst_angle, Eigen::AngleAxisd(est.linear().transpose() * p.world_from_vehicle.linear()).angle());
     }
   }
   // GPS sigma 5 cm horizontal, 10 cm vertical, smoothed; heading from a 2 m baseline
@@ -83,9 +84,10 @@ TEST(PipelineTest, FullRunBringsObjectHeightsCloserToTheTruth) {
   const auto& seen = h.by_view.at("in_camera_view");
   ASSERT_GT(seen.first.count, 50u);
   EXPECT_LT(seen.second.mae, seen.first.mae);
-  EXPECT_GT(h.raised_by_view.at("in_camera_view"), h.raised_by_view.count("never_in_camera_view")
-                                                       ? h.raised_by_view.at("never_in_camera_view") : 0u);
-  EXPECT_EQ(seen.first.count + (h.by_view.count("never_in_camera_view") ? h.by_view.at("never_in_camera_view").first.count : 0u),
+  EXPECT_GT(h.raised_by_view.at("in_camera_view"),
+            h.raised_by_view.count("never_in_camera_view") ? h.raised_by_view.at("never_in_camera_view") : 0u);
+  EXPECT_EQ(seen.first.count +
+                (h.by_view.count("never_in_camera_view") ? h.by_view.at("never_in_camera_view").first.count : 0u),
             h.before.count);
   // the segmentation found ground and objects
   std::size_t ground = 0;
@@ -136,13 +138,13 @@ TEST(PipelineTest, BadFramesGiveWarningsNotCrashes) {
   int k = 0;
   while (auto f = rig.next()) {
     SensorFrame s = f->sensors;
-    if (k == 12) s.sweep.points.clear();                     // empty sweep
-    if (k == 13) s.sweep.points[5].x = std::nanf("");        // NaN point
-    if (k == 14) s.sweep.points[6].z = INFINITY;             // infinite point
-    if (k == 15) s.images.clear();                           // no image
-    if (k == 16) s.gps.clear();                              // no GPS fix
-    if (k == 17) s.images.at(0).rgb = cv::Mat();             // empty image
-    if (k == 18) s.gyro.clear();                             // no gyro
+    if (k == 12) s.sweep.points.clear();               // empty sweep
+    if (k == 13) s.sweep.points[5].x = std::nanf("");  // NaN point
+    if (k == 14) s.sweep.points[6].z = INFINITY;       // infinite point
+    if (k == 15) s.images.clear();                     // no image
+    if (k == 16) s.gps.clear();                        // no GPS fix
+    if (k == 17) s.images.at(0).rgb = cv::Mat();       // empty image
+    if (k == 18) s.gyro.clear();                       // no gyro
     pipeline.process(s);
     ++k;
   }

@@ -57,7 +57,8 @@ TEST(VoxelMapTest, ManyPointsGiveTheVoxelsOfAPlainMap) {
       if (i % 997 == 0) p.x() = nan;
       if (i % 1499 == 0) p.y() = 1e12;
       points.push_back(p);
-      colours.push_back({static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(frame), 7, static_cast<std::uint8_t>(i % 3)});
+      colours.push_back(
+          {static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(frame), 7, static_cast<std::uint8_t>(i % 3)});
     }
     std::vector<std::uint32_t> voxel_of;
     const std::size_t before = expected.size();

@@ -1,7 +1,7 @@
 #include "evaluation/metrics.hpp"
 #include "core/camera_model.hpp"
-#include "evaluation/report.hpp"
 #include "evaluation/ground_truth.hpp"
+#include "evaluation/report.hpp"
 #include "evaluation/scoring.hpp"
 #include "tests/test_support.hpp"
 
@@ -211,7 +211,7 @@ TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtItItsLowerPartWhenIt
     const auto world = test::wallWorld(c.distance);
     const double p = c.pitch_deg * M_PI / 180;
     CameraTruthFrame f;
-    f.world_from_camera.linear().col(0) = Vector3(0, -1, 0);                     // right = south
+    f.world_from_camera.linear().col(0) = Vector3(0, -1, 0);                      // right = south
     f.world_from_camera.linear().col(1) = Vector3(std::sin(p), 0, -std::cos(p));  // down
     f.world_from_camera.linear().col(2) = Vector3(std::cos(p), 0, std::sin(p));   // forward: east, tilted up
     f.world_from_camera.translation() = Vector3(0, 0, 1.6);

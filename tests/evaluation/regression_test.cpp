@@ -32,7 +32,8 @@ TEST(RegressionTest, PassesWithinToleranceAndFailsPastIt) {
   EXPECT_EQ(compare(s, baseline, {{"flat_s1_f5", {{"f1", 0.93}, {"mae_m", 3.0}}}}).regressions, 1);
   EXPECT_EQ(compare(s, baseline, {{"flat_s1_f5", {{"f1", 0.95}, {"mae_m", 3.6}}}}).regressions, 1);
   // a metric without a baseline, or a NaN value, fails
-  EXPECT_EQ(compare(s, {{"flat_s1_f5", {{"f1", 0.95}}}}, {{"flat_s1_f5", {{"f1", 0.95}, {"mae_m", 3.0}}}}).regressions, 1);
+  EXPECT_EQ(compare(s, {{"flat_s1_f5", {{"f1", 0.95}}}}, {{"flat_s1_f5", {{"f1", 0.95}, {"mae_m", 3.0}}}}).regressions,
+            1);
   EXPECT_EQ(compare(s, baseline, {{"flat_s1_f5", {{"f1", std::nan("")}, {"mae_m", 3.0}}}}).regressions, 1);
 }
 
@@ -52,11 +53,14 @@ TEST(RegressionTest, AnAverageOverTooFewIsNotComparedButStillNeedsItsCount) {
   ASSERT_EQ(few.rows.size(), 1u);
   EXPECT_TRUE(few.rows[0].skipped);
   EXPECT_EQ(few.rows[0].count, 1);
-  EXPECT_EQ(compare(s, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 49}}}}, {{"rough_s1_f8", {{"mae_m", 30.0}, {"cells", 300}}}})
+  EXPECT_EQ(compare(s, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 49}}}},
+                    {{"rough_s1_f8", {{"mae_m", 30.0}, {"cells", 300}}}})
                 .skipped,
             1);
   // the count missing from either side fails, as a missing metric does
-  EXPECT_EQ(compare(s, {{"rough_s1_f8", {{"mae_m", 10.2}}}}, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 80}}}}).regressions, 1);
+  EXPECT_EQ(
+      compare(s, {{"rough_s1_f8", {{"mae_m", 10.2}}}}, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", 80}}}}).regressions,
+      1);
   EXPECT_EQ(compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 10.2}}}}).regressions, 1);
   // a NaN count is not enough
   EXPECT_EQ(compare(s, baseline, {{"rough_s1_f8", {{"mae_m", 10.2}, {"cells", std::nan("")}}}}).skipped, 1);
@@ -93,13 +97,15 @@ TEST(RegressionTest, AnAverageOverTooFewIsNotComparedButStillNeedsItsCount) {
   } catch (const io::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("word.yaml:4: metric 'mae_m': bad value"), std::string::npos) << e.what();
   }
-  io::writeFileAtomic(dir / "half.yaml",
-                      "scenarios:\n  - {type: rough}\nmetrics:\n  mae_m: {better: lower, tolerance: 0.5, count: cells}\n", true);
+  io::writeFileAtomic(
+      dir / "half.yaml",
+      "scenarios:\n  - {type: rough}\nmetrics:\n  mae_m: {better: lower, tolerance: 0.5, count: cells}\n", true);
   try {
     loadSuite(dir / "half.yaml");
     FAIL();
   } catch (const io::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("half.yaml:4: metric 'mae_m': give 'count' (a report field) and 'min_count' together"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "half.yaml:4: metric 'mae_m': give 'count' (a report field) and 'min_count' together"),
               std::string::npos)
         << e.what();
   }
@@ -128,11 +134,15 @@ TEST(RegressionTest, BaselinesAndSuitesRoundTripAndJunitNamesFailures) {
   const std::string xml = junitXml(s, res);
   EXPECT_NE(xml.find("failures=\"1\""), std::string::npos);
   EXPECT_NE(xml.find("<testcase classname=\"flat_s1_f5\" name=\"f1\"><failure"), std::string::npos);
-  io::writeFileAtomic(dir / "s.yaml", "frames: 4\nscenarios:\n  - {type: urban, seeds: [1, 2]}\nmetrics:\n  f1: {better: higher, tolerance: 0.01}\n", true);
+  io::writeFileAtomic(
+      dir / "s.yaml",
+      "frames: 4\nscenarios:\n  - {type: urban, seeds: [1, 2]}\nmetrics:\n  f1: {better: higher, tolerance: 0.01}\n",
+      true);
   const Suite loaded = loadSuite(dir / "s.yaml");
   ASSERT_EQ(loaded.scenarios.size(), 2u);
   EXPECT_EQ(loaded.scenarios[1].id(), "urban_s2_f4");
-  io::writeFileAtomic(dir / "bad.yaml", "scenarios:\n  - {type: urban}\nmetrics:\n  f1: {better: up, tolerance: 0.01}\n", true);
+  io::writeFileAtomic(dir / "bad.yaml",
+                      "scenarios:\n  - {type: urban}\nmetrics:\n  f1: {better: up, tolerance: 0.01}\n", true);
   try {
     loadSuite(dir / "bad.yaml");
     FAIL();
@@ -155,7 +165,8 @@ TEST(RegressionTest, ShardsSplitTheSuiteAndMergeBackOrSayWhatIsMissing) {
   EXPECT_EQ(shardOf(s, {1, 3}).scenarios.size(), 3u);
   EXPECT_EQ(shardOf(s, {3, 3}).scenarios.size(), 2u);
   EXPECT_EQ(parseShard("2/8").k, 2);
-  for (const char* bad : {"0/3", "4/3", "3", "a/b", "1/3x", "-1/2"}) EXPECT_THROW(parseShard(bad), io::InputError) << bad;
+  for (const char* bad : {"0/3", "4/3", "3", "a/b", "1/3x", "-1/2"})
+    EXPECT_THROW(parseShard(bad), io::InputError) << bad;
 
   // each shard's output as a shard run leaves it
   test::TempDir dir;

@@ -32,7 +32,8 @@ LaserCalibration table(int lasers, double offset) {
 void check(const LidarSweep& s) {
   for (const auto& p : s.points) {
     // every point of a sweep comes from a checked packet: finite, within the 16-bit range
-    if (!(p.x == p.x) || !(p.y == p.y) || !(p.z == p.z) || p.x * p.x + p.y * p.y + p.z * p.z > 200.0f * 200.0f) std::abort();
+    if (!(p.x == p.x) || !(p.y == p.y) || !(p.z == p.z) || p.x * p.x + p.y * p.y + p.z * p.z > 200.0f * 200.0f)
+      std::abort();
   }
 }
 
@@ -47,7 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   while (pos < size) {
     const std::uint8_t pick = data[pos++];
     std::size_t n = velodyne::kPacketSize;
-    if (pick % 8 == 1) n = pick;            // short
+    if (pick % 8 == 1) n = pick;                                  // short
     if (pick % 8 == 2) n = velodyne::kPacketSize + pick % 3 + 1;  // oversized
     n = std::min(n, size - pos);
     a64.push(data + pos, n, out);

@@ -17,7 +17,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // the loader reads a file: the input goes to one in memory-backed /dev/shm
   static const std::string path = "/dev/shm/terrain-sidecar-fuzz-" + std::to_string(getpid()) + ".truth.json";
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   try {
     const terrain::scenes::SceneTruth t = terrain::scenes::loadTruth(path);
     for (const auto& o : t.objects) {

@@ -76,11 +76,16 @@ TEST(DatasetTest, MalformedCsvIsNamedWithItsLine) {
   }
   // an empty laser table is refused on load
   EXPECT_THROW(DatasetSource(dir / "ds"), io::InputError);
-  io::writeFileAtomic(dir / "ds" / "lasers.yaml", "lasers:\n" + [] {
-    std::string s;
-    for (int i = 0; i < 16; ++i) s += "- {laser_id: " + std::to_string(i) + ", rot_correction: 0, vert_correction: 0}\n";
-    return s;
-  }(), true);
+  io::writeFileAtomic(
+      dir / "ds" / "lasers.yaml",
+      "lasers:\n" +
+          [] {
+            std::string s;
+            for (int i = 0; i < 16; ++i)
+              s += "- {laser_id: " + std::to_string(i) + ", rot_correction: 0, vert_correction: 0}\n";
+            return s;
+          }(),
+      true);
   EXPECT_NO_THROW(DatasetSource(dir / "ds"));
   io::writeFileAtomic(dir / "ds" / "gps.csv", "time_s,lat,lon,alt,sigma\n1,2,3,4,5\n1,2,x,4,5\n", true);
   try {
@@ -110,7 +115,8 @@ TEST(DatasetTest, MalformedCsvIsNamedWithItsLine) {
   auto manifest = nlohmann::json::parse(io::readFile(dir / "ds" / "manifest.json"));
   manifest["ground_truth"] = true;
   io::writeFileAtomic(dir / "ds" / "manifest.json", manifest.dump(1), true);
-  io::writeFileAtomic(dir / "ds" / "poses_gt.csv", "time_s,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n0.1,0,0,0,0.5,0,0,0\n", true);
+  io::writeFileAtomic(dir / "ds" / "poses_gt.csv", "time_s,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n0.1,0,0,0,0.5,0,0,0\n",
+                      true);
   try {
     DatasetSource s(dir / "ds");
     ADD_FAILURE() << "a quaternion of norm 0.5 was accepted";
@@ -124,7 +130,8 @@ TEST(DatasetTest, MalformedCsvIsNamedWithItsLine) {
 const char* sixteenLasers() {
   static const std::string yaml = [] {
     std::string s = "lasers:\n";
-    for (int i = 0; i < 16; ++i) s += "- {laser_id: " + std::to_string(i) + ", rot_correction: 0, vert_correction: 0}\n";
+    for (int i = 0; i < 16; ++i)
+      s += "- {laser_id: " + std::to_string(i) + ", rot_correction: 0, vert_correction: 0}\n";
     return s;
   }();
   return yaml.c_str();
@@ -173,7 +180,8 @@ TEST(DatasetTest, BadCameraListsAreNamed) {
   };
   RigCalibration cal = threeCameras();
   cal.cameras[2].name = "front";
-  EXPECT_NE(error(cal).find("cal.json: camera 2 ('front'): duplicate camera name (also camera 0)"), std::string::npos) << error(cal);
+  EXPECT_NE(error(cal).find("cal.json: camera 2 ('front'): duplicate camera name (also camera 0)"), std::string::npos)
+      << error(cal);
   cal = threeCameras();
   cal.cameras[1].name = "";
   EXPECT_NE(error(cal).find("camera 1 has no name"), std::string::npos);
@@ -195,7 +203,8 @@ void writeOneFrame(const fs::path& dir, const RigCalibration& cal) {
   f.sensors.sweep.end_time = 0.1;
   for (std::size_t c = 0; c < cal.cameras.size(); ++c) {
     const CameraIntrinsics& k = cal.cameras[c].intrinsics;
-    f.sensors.images.push_back({static_cast<int>(c), 0.0, cv::Mat(k.height, k.width, CV_8UC3, cv::Scalar(10 * c, 20, 30))});
+    f.sensors.images.push_back(
+        {static_cast<int>(c), 0.0, cv::Mat(k.height, k.width, CV_8UC3, cv::Scalar(10 * c, 20, 30))});
   }
   w.write(f);
   w.finish();
@@ -206,7 +215,8 @@ TEST(DatasetTest, EveryCamerasImagesComeBackUnderItsName) {
   test::TempDir dir;
   const RigCalibration cal = threeCameras();
   writeOneFrame(dir / "ds", cal);
-  for (const char* n : {"front", "left", "rear"}) EXPECT_TRUE(fs::exists(dir / "ds" / "camera" / n / "000000.png")) << n;
+  for (const char* n : {"front", "left", "rear"})
+    EXPECT_TRUE(fs::exists(dir / "ds" / "camera" / n / "000000.png")) << n;
   DatasetSource source(dir / "ds");
   EXPECT_EQ(source.formatVersion(), 2);
   const auto f = source.next();

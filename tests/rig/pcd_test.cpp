@@ -15,7 +15,8 @@ LidarSweep sampleSweep() {
   s.start_time = 10.0;
   s.end_time = 10.1;
   for (int i = 0; i < 5; ++i) {
-    s.points.push_back({1.5f * i, -2.0f, 0.25f * i, 10.0f * i, static_cast<std::uint16_t>(i * 7), 0.01f * i, 10.0 + 1e-5 * i});
+    s.points.push_back(
+        {1.5f * i, -2.0f, 0.25f * i, 10.0f * i, static_cast<std::uint16_t>(i * 7), 0.01f * i, 10.0 + 1e-5 * i});
   }
   return s;
 }

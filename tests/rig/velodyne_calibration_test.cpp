@@ -27,8 +27,8 @@ std::string yaml32(int bad_laser = -1, const std::string& bad_entry = "") {
   std::string s = "lasers:\n";
   for (int i = 0; i < 32; ++i) {
     s += i == bad_laser ? bad_entry
-                        : "- {laser_id: " + std::to_string(i) + ", rot_correction: 0.0, vert_correction: " +
-                              std::to_string(-0.5 + i * 0.03) + "}\n";
+                        : "- {laser_id: " + std::to_string(i) +
+                              ", rot_correction: 0.0, vert_correction: " + std::to_string(-0.5 + i * 0.03) + "}\n";
   }
   return s;
 }
@@ -81,8 +81,9 @@ TEST(VelodyneCalibrationTest, RefusesBadFilesNamingTheProblem) {
             std::string::npos);
   EXPECT_NE(errorOf(yaml32(3, "- {laser_id: 3, rot_correction: 0}\n")).find("'vert_correction' is missing"),
             std::string::npos);
-  EXPECT_NE(errorOf(yaml32(3, "- {laser_id: 3, rot_correction: 0, vert_correction: 7.5}\n")).find("laser 3: vert_correction"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf(yaml32(3, "- {laser_id: 3, rot_correction: 0, vert_correction: 7.5}\n")).find("laser 3: vert_correction"),
+      std::string::npos);
   EXPECT_NE(errorOf(yaml32(3, "- {laser_id: 3, rot_correction: abc, vert_correction: 0}\n")).find("not a number"),
             std::string::npos);
   EXPECT_NE(errorOf(yaml32(3, "- {laser_id: 99, rot_correction: 0, vert_correction: 0}\n")).find("laser_id 99"),

@@ -55,7 +55,8 @@ void writeCapture(const fs::path& path, const std::vector<TimedPacket>& packets,
   for (const auto& p : packets) {
     const double due = static_cast<double>(next_sentence);
     if (next_sentence < sentences.size() && p.time >= due) {
-      const auto pos = velodyne::positionPacket(static_cast<std::uint32_t>(std::llround(due * 1e6)), sentences[next_sentence]);
+      const auto pos =
+          velodyne::positionPacket(static_cast<std::uint32_t>(std::llround(due * 1e6)), sentences[next_sentence]);
       w.write(epoch + due, pos.data(), pos.size(), velodyne::kPositionPort);
       ++next_sentence;
     }
@@ -155,7 +156,8 @@ TEST(VelodyneCaptureTest, AKnownGprmcSentenceGivesItsFix) {
   // a time of day with a sign (found by scripts/fuzz) is no hhmmss
   EXPECT_FALSE(velodyne::parseNmea("$GPGGA,-10760,38,,,,,,,-21520,,,", &why));
   EXPECT_NE(why.find("is not hhmmss"), std::string::npos) << why;
-  EXPECT_FALSE(velodyne::parseNmea("$GPRMC,15555555555523519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W", &why));
+  EXPECT_FALSE(
+      velodyne::parseNmea("$GPRMC,15555555555523519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W", &why));
   EXPECT_NE(why.find("is not hhmmss"), std::string::npos) << why;
   ASSERT_TRUE(velodyne::parseNmea("$GPRMC,123519.25,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W", &why)) << why;
   // our own sentences read back
@@ -232,8 +234,8 @@ TEST(VelodyneCaptureTest, AGpggaSentenceReadsBackAsItsFix) {
 TEST(VelodyneCaptureTest, ARecordedCaptureCarriesTheSimulatedGps) {
   test::TempDir dir;
   const std::string rec = (dir / "rec").string(), conv = (dir / "conv").string();
-  ASSERT_EQ(0, test::sh(test::kCli + " record --scene " + test::kUrbanScene + " --frames 12 --cameras forward --pcap --out " +
-                        rec + " > /dev/null"));
+  ASSERT_EQ(0, test::sh(test::kCli + " record --scene " + test::kUrbanScene +
+                        " --frames 12 --cameras forward --pcap --out " + rec + " > /dev/null"));
   ASSERT_EQ(0, test::sh(test::kCli + " lidar convert --pcap " + rec + "/lidar.pcap --out " + conv + " > /dev/null"));
   const auto rows = [](const std::string& path) {
     std::vector<std::vector<double>> out;
@@ -357,12 +359,14 @@ TEST(VelodyneCaptureTest, ALiveStreamWithoutAPacketIsAnErrorAfterTheFirstPacketT
 TEST(VelodyneCaptureTest, LidarCommandsFailLoudlyAndLeaveOutputsAlone) {
   test::TempDir dir;
   const std::string cli = test::kCli;
-  ASSERT_EQ(0, test::sh(cli + " lidar inspect " + kSample.string() + " --json " + (dir / "scan.json").string() + " > /dev/null"));
+  ASSERT_EQ(0, test::sh(cli + " lidar inspect " + kSample.string() + " --json " + (dir / "scan.json").string() +
+                        " > /dev/null"));
   const std::string json = io::readFile(dir / "scan.json");
   EXPECT_NE(json.find("\"model\": \"HDL-32E\""), std::string::npos);
   // convert: the sweeps, and nothing of a failed attempt over it
   const fs::path out = dir / "out";
-  ASSERT_EQ(0, test::sh(cli + " lidar convert --pcap " + kSample.string() + " --out " + out.string() + " --kitti > /dev/null 2>&1"));
+  ASSERT_EQ(0, test::sh(cli + " lidar convert --pcap " + kSample.string() + " --out " + out.string() +
+                        " --kitti > /dev/null 2>&1"));
   EXPECT_TRUE(fs::exists(out / "sweeps" / "000003.pcd"));
   EXPECT_TRUE(fs::exists(out / "kitti" / "000003.bin"));
   EXPECT_EQ(fs::file_size(out / "kitti" / "000001.bin") % 16, 0u);
@@ -382,13 +386,16 @@ TEST(VelodyneCaptureTest, LidarCommandsFailLoudlyAndLeaveOutputsAlone) {
     const std::string text = io::readFile(err);
     EXPECT_NE(text.find(message), std::string::npos) << args << ": " << text;
   };
-  fails("lidar convert --pcap " + (dir / "pos.pcap").string() + " --out " + out.string() + " --force", "no lidar data packet");
+  fails("lidar convert --pcap " + (dir / "pos.pcap").string() + " --out " + out.string() + " --force",
+        "no lidar data packet");
   fails("lidar convert --pcap " + kSample.string() + " --out " + out.string() + " --force --calibration " +
-            shippedCalibration(Model::Hdl64E).string(), "64 lasers, but");
+            shippedCalibration(Model::Hdl64E).string(),
+        "64 lasers, but");
   fails("lidar convert --pcap " + cut + " --out " + out.string() + " --force --strict", "cut off");
   fails("lidar convert --pcap " + kSample.string() + " --out " + out.string(), "exists and is not empty");
   fails("lidar inspect " + cut + " --strict", "cut off");
-  fails("reconstruct --lidar pcap:" + (dir / "pos.pcap").string() + " --out " + out.string() + " --force", "no lidar data packet");
+  fails("reconstruct --lidar pcap:" + (dir / "pos.pcap").string() + " --out " + out.string() + " --force",
+        "no lidar data packet");
   fails("reconstruct --lidar pcap:" + cut + " --strict --out " + out.string() + " --force", "cut off");
   fails("reconstruct --lidar udp:127.0.0.1:0 --out " + out.string() + " --force", "can be reconstructed alone");
   EXPECT_EQ(io::readFile(out / "sweeps.csv"), before);
@@ -396,10 +403,12 @@ TEST(VelodyneCaptureTest, LidarCommandsFailLoudlyAndLeaveOutputsAlone) {
     EXPECT_EQ(e.path().string().find(".partial"), std::string::npos) << e.path();
   }
   // a cut-off capture without --strict converts, with the warning in capture.json
-  ASSERT_EQ(0, test::sh(cli + " lidar convert --pcap " + cut + " --out " + (dir / "cut").string() + " > /dev/null 2>&1"));
+  ASSERT_EQ(0,
+            test::sh(cli + " lidar convert --pcap " + cut + " --out " + (dir / "cut").string() + " > /dev/null 2>&1"));
   EXPECT_NE(io::readFile(dir / "cut" / "capture.json").find("cut off"), std::string::npos);
   // and reconstructs alone, unscored, the warning in warnings.json and report.json
-  ASSERT_EQ(0, test::sh(cli + " reconstruct --lidar pcap:" + cut + " --out " + (dir / "rec").string() + " > /dev/null 2>&1"));
+  ASSERT_EQ(
+      0, test::sh(cli + " reconstruct --lidar pcap:" + cut + " --out " + (dir / "rec").string() + " > /dev/null 2>&1"));
   const std::string report = io::readFile(dir / "rec" / "report.json");
   EXPECT_NE(report.find("\"scored\": false"), std::string::npos);
   EXPECT_NE(report.find("cut off"), std::string::npos);

@@ -6,8 +6,8 @@
 #include "sim/simulated_rig.hpp"
 #include "tests/test_support.hpp"
 
-#include <pcl/io/hdl_grabber.h>
 #include <gtest/gtest.h>
+#include <pcl/io/hdl_grabber.h>
 
 #include <chrono>
 #include <cmath>
@@ -27,7 +27,9 @@ using velodyne::TimedPacket;
 
 const std::string kData = std::string(TERRAIN_SOURCE_DIR) + "/tests/data/velodyne/";
 
-LaserCalibration hdl64() { return loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml"); }
+LaserCalibration hdl64() {
+  return loadLaserCalibration(std::string(TERRAIN_SOURCE_DIR) + "/data/calibration/hdl64e_s2.1-sztaki.yaml");
+}
 
 // simulated sweeps of a flat ground and a wall 20 m ahead, noise on, camera off
 struct Simulated {
@@ -283,7 +285,8 @@ TEST(VelodynePacketTest, PositionThirtySixThousandIsZeroDegreesAndKeepsItsReturn
   Payload next = s.packets[6].payload;
   for (int b = 0; b < 12; ++b) {
     const int step = 3 + 3 * (b / 2);
-    next[b * 100 + 2] = static_cast<std::uint8_t>(step & 0xFF), next[b * 100 + 3] = static_cast<std::uint8_t>(step >> 8);
+    next[b * 100 + 2] = static_cast<std::uint8_t>(step & 0xFF),
+                   next[b * 100 + 3] = static_cast<std::uint8_t>(step >> 8);
   }
   SweepAssembler c(s.lasers);
   ASSERT_TRUE(c.push(p.data(), p.size(), out));
@@ -371,14 +374,15 @@ TEST(VelodynePcapTest, WriterAndReaderRoundTripAndOtherTrafficIsSkipped) {
     std::size_t off = 24;
     int k = 0;
     while (off < bytes.size()) {
-      const std::uint32_t len = static_cast<std::uint8_t>(bytes[off + 8]) | (static_cast<std::uint8_t>(bytes[off + 9]) << 8);
+      const std::uint32_t len =
+          static_cast<std::uint8_t>(bytes[off + 8]) | (static_cast<std::uint8_t>(bytes[off + 9]) << 8);
       std::string rec = bytes.substr(off, 16 + len);
       off += 16 + len;
       mixed += rec;
       std::string other = rec;
-      if (k % 3 == 0) other[16 + 12] = 0x08, other[16 + 13] = 0x06;   // ARP
-      if (k % 3 == 1) other[16 + 14 + 9] = 6;                         // TCP
-      if (k % 3 == 2) other[16 + 14 + 20 + 3] = 0x41;                 // UDP to port 2369 (0x0941)
+      if (k % 3 == 0) other[16 + 12] = 0x08, other[16 + 13] = 0x06;  // ARP
+      if (k % 3 == 1) other[16 + 14 + 9] = 6;                        // TCP
+      if (k % 3 == 2) other[16 + 14 + 20 + 3] = 0x41;                // UDP to port 2369 (0x0941)
       mixed += other;
       ++k;
     }

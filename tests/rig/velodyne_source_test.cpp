@@ -35,7 +35,8 @@ TEST(LidarEndpointTest, LocalhostIsTheLoopbackAddress) {
 }
 
 TEST(LidarEndpointTest, BadEndpointsAreNamedWithTheirRole) {
-  EXPECT_EQ(errorOf("udp:lidar.local:2368"), "lidar source 'udp:lidar.local:2368': 'lidar.local' is not an IPv4 address (nor localhost)");
+  EXPECT_EQ(errorOf("udp:lidar.local:2368"),
+            "lidar source 'udp:lidar.local:2368': 'lidar.local' is not an IPv4 address (nor localhost)");
   EXPECT_EQ(errorOf("udp:127.0.0.1:port", "stream destination"),
             "stream destination 'udp:127.0.0.1:port': port 'port' is not a number in [0, 65535]");
   EXPECT_NE(errorOf("tcp:1.2.3.4:1").find("expected pcap:FILE or udp:HOST:PORT"), std::string::npos);

@@ -23,15 +23,13 @@ TEST(SceneGeneratorTest, SameTypeAndSeedGiveByteIdenticalFiles) {
     cfg.seed = 9;
     writeScene(generateScene(cfg), dir / (type + "_a.xml"), false);
     writeScene(generateScene(cfg), dir / (type + "_b.xml"), false);
-    EXPECT_EQ(io::readFile(dir / (type + "_a.xml")),
-              [&] {
-                // the files name their own heightfield: compare with the name swapped back
-                std::string b = io::readFile(dir / (type + "_b.xml"));
-                const auto at = b.find(type + "_b.hfield");
-                if (at != std::string::npos) b.replace(at, type.size() + 9, type + "_a.hfield");
-                return b;
-              }())
-        << type;
+    EXPECT_EQ(io::readFile(dir / (type + "_a.xml")), [&] {
+      // the files name their own heightfield: compare with the name swapped back
+      std::string b = io::readFile(dir / (type + "_b.xml"));
+      const auto at = b.find(type + "_b.hfield");
+      if (at != std::string::npos) b.replace(at, type.size() + 9, type + "_a.hfield");
+      return b;
+    }()) << type;
     if (fs::exists(dir / (type + "_a.hfield"))) {
       EXPECT_EQ(io::readFile(dir / (type + "_a.hfield")), io::readFile(dir / (type + "_b.hfield"))) << type;
     }
@@ -117,7 +115,8 @@ TEST(SceneTruthTest, WrongSidecarsAreRefusedWithTheField) {
   const std::string good = truthToJson(generateScene(SceneConfig{"urban", 1}).truth);
   io::writeFileAtomic(dir / "good.truth.json", good, false);
   ASSERT_NO_THROW(loadTruth(dir / "good.truth.json"));
-  const auto refused = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit, const std::string& message) {
+  const auto refused = [&](const std::string& name, const std::function<void(nlohmann::json&)>& edit,
+                           const std::string& message) {
     nlohmann::json j = nlohmann::json::parse(good);
     edit(j);
     const fs::path f = dir / (name + ".truth.json");
@@ -130,17 +129,34 @@ TEST(SceneTruthTest, WrongSidecarsAreRefusedWithTheField) {
       EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << name << ": " << e.what();
     }
   };
-  refused("unknown_top", [](auto& j) { j["colour"] = "red"; }, "field 'colour' is not a field here");
-  refused("unknown_object_field", [](auto& j) { j["objects"][0]["heigth"] = 3; }, "field 'objects[0].heigth' is not a field here");
-  refused("two_point_footprint", [](auto& j) { j["objects"][0]["footprint"] = {{0, 0}, {1, 1}}; },
-          "objects[0].footprint' needs at least 3 points");
-  refused("duplicate_id", [](auto& j) { j["objects"][1]["id"] = j["objects"][0]["id"]; }, "is the id of an earlier object too");
-  refused("geom_twice", [](auto& j) { j["objects"][1]["geoms"].push_back(j["objects"][0]["geoms"][0]); },
-          "belongs to object");
-  refused("geom_not_a_name", [](auto& j) { j["objects"][0]["geoms"] = {7}; }, "must hold geom names");
-  refused("repeated_waypoint", [](auto& j) { j["path"]["waypoints"][1] = j["path"]["waypoints"][0]; },
-          "are the same (a segment of length 0)");
-  refused("terrain_pos_text", [](auto& j) { j["terrain"]["pos"] = {0, "up", 0}; }, "terrain.pos' must hold finite numbers");
+  refused(
+      "unknown_top", [](auto& j) { j["colour"] = "red"; }, "field 'colour' is not a field here");
+  refused(
+      "unknown_object_field", [](auto& j) { j["objects"][0]["heigth"] = 3; },
+      "field 'objects[0].heigth' is not a field here");
+  refused(
+      "two_point_footprint",
+      [](auto& j) {
+        j["objects"][0]["footprint"] = {{0, 0}, {1, 1}};
+      },
+      "objects[0].footprint' needs at least 3 points");
+  refused(
+      "duplicate_id", [](auto& j) { j["objects"][1]["id"] = j["objects"][0]["id"]; },
+      "is the id of an earlier object too");
+  refused(
+      "geom_twice", [](auto& j) { j["objects"][1]["geoms"].push_back(j["objects"][0]["geoms"][0]); },
+      "belongs to object");
+  refused(
+      "geom_not_a_name", [](auto& j) { j["objects"][0]["geoms"] = {7}; }, "must hold geom names");
+  refused(
+      "repeated_waypoint", [](auto& j) { j["path"]["waypoints"][1] = j["path"]["waypoints"][0]; },
+      "are the same (a segment of length 0)");
+  refused(
+      "terrain_pos_text",
+      [](auto& j) {
+        j["terrain"]["pos"] = {0, "up", 0};
+      },
+      "terrain.pos' must hold finite numbers");
 }
 
 TEST(WorldTest, MalformedScenesGetMuJoCosMessageWithTheLine) {

@@ -61,8 +61,9 @@ TEST(SceneImportTest, ACampusWorldGivesItsObjectsClassesAndAPathWithRoom) {
   ASSERT_TRUE(dorm);
   EXPECT_DOUBLE_EQ(dorm->top_height, 24);
   ASSERT_EQ(dorm->footprint.size(), 4u);
-  EXPECT_TRUE(std::any_of(dorm->footprint.begin(), dorm->footprint.end(),
-                          [](const Eigen::Vector2d& p) { return (p - Eigen::Vector2d(-13.17, -13.17)).norm() < 0.01; }));
+  EXPECT_TRUE(std::any_of(dorm->footprint.begin(), dorm->footprint.end(), [](const Eigen::Vector2d& p) {
+    return (p - Eigen::Vector2d(-13.17, -13.17)).norm() < 0.01;
+  }));
   const auto* oak = object(s.truth, "oak_crown");
   ASSERT_TRUE(oak);
   EXPECT_EQ(oak->object_class, scenes::GeomClass::Crown);
@@ -103,8 +104,8 @@ TEST(SceneImportTest, WhatCannotBeImportedIsRefusedWithTheReason) {
     EXPECT_NE(std::string(e.what()).find("no straight path along x"), std::string::npos) << e.what();
   }
   // no plane or heightfield
-  io::writeFileAtomic(dir / "floating.xml", R"(<mujoco><worldbody><geom name="house" type="box" size="1 1 1"/></worldbody></mujoco>)",
-                      true);
+  io::writeFileAtomic(dir / "floating.xml",
+                      R"(<mujoco><worldbody><geom name="house" type="box" size="1 1 1"/></worldbody></mujoco>)", true);
   EXPECT_THROW(importScene(dir / "floating.xml", dir / "s.xml", ImportOptions{}), io::InputError);
   // a class file with a class that does not exist, and one whose patterns are not a list
   ImportOptions options;

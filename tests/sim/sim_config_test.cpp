@@ -24,7 +24,9 @@ std::string errorOf(const test::TempDir& dir, const std::string& yaml) {
 
 TEST(SimConfigTest, YamlFillsTheNamedFields) {
   test::TempDir dir;
-  io::writeFileAtomic(dir / "sim.yaml", "seed: 7\nrobot:\n  speed: 1.5\nlidar:\n  height_cap: 3.0\ncamera:\n  rig: forward\n  width: 320\n", true);
+  io::writeFileAtomic(
+      dir / "sim.yaml",
+      "seed: 7\nrobot:\n  speed: 1.5\nlidar:\n  height_cap: 3.0\ncamera:\n  rig: forward\n  width: 320\n", true);
   SimConfig c;
   loadSimConfig(dir / "sim.yaml", c);
   EXPECT_EQ(c.seed, 7u);
@@ -41,12 +43,13 @@ TEST(SimConfigTest, YamlFillsTheNamedFields) {
 
 TEST(SimConfigTest, AnExplicitCameraListReplacesTheNamedRig) {
   test::TempDir dir;
-  io::writeFileAtomic(dir / "sim.yaml",
-                      "cameras:\n"
-                      "  - {name: up_front, position: [0.3, 0, 1.7], pitch_deg: 20}\n"
-                      "  - {name: back, position: [-0.3, 0, 1.7], yaw_deg: 180, roll_deg: 5, width: 320, height: 200, fovy_deg: 60}\n"
-                      "camera:\n  pitch_deg: 10\n",
-                      true);
+  io::writeFileAtomic(
+      dir / "sim.yaml",
+      "cameras:\n"
+      "  - {name: up_front, position: [0.3, 0, 1.7], pitch_deg: 20}\n"
+      "  - {name: back, position: [-0.3, 0, 1.7], yaw_deg: 180, roll_deg: 5, width: 320, height: 200, fovy_deg: 60}\n"
+      "camera:\n  pitch_deg: 10\n",
+      true);
   SimConfig c;
   loadSimConfig(dir / "sim.yaml", c);
   validate(c);
@@ -73,18 +76,23 @@ TEST(SimConfigTest, BadCameraRigsAreNamed) {
   EXPECT_NE(errorOf(dir, "camera:\n  rig: panorama\n").find("unknown camera rig 'panorama' (known: surround, forward)"),
             std::string::npos);
   EXPECT_NE(errorOf(dir, "cameras: []\n").find("the camera list is empty"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: a, position: [0.3, 0, 1.6]}\n  - {name: a, position: [-0.3, 0, 1.6], yaw_deg: 180}\n")
-                .find("duplicate camera name 'a'"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf(
+          dir,
+          "cameras:\n  - {name: a, position: [0.3, 0, 1.6]}\n  - {name: a, position: [-0.3, 0, 1.6], yaw_deg: 180}\n")
+          .find("duplicate camera name 'a'"),
+      std::string::npos);
   EXPECT_NE(errorOf(dir, "cameras:\n  - {position: [0.3, 0, 1.6]}\n").find("a camera needs a name"), std::string::npos);
   EXPECT_NE(errorOf(dir, "cameras:\n  - {name: a, zoom: 2}\n").find("unknown camera field 'zoom'"), std::string::npos);
   // inside the chassis, and behind the mast looking at it
-  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: low, position: [0, 0.2, 0.4]}\n").find("'low'): the camera sits inside the robot's body"),
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: low, position: [0, 0.2, 0.4]}\n")
+                .find("'low'): the camera sits inside the robot's body"),
             std::string::npos);
   EXPECT_NE(errorOf(dir, "cameras:\n  - {name: back, position: [-0.3, 0, 1.2], pitch_deg: 0}\n")
                 .find("'back'): the camera looks into the robot's body"),
             std::string::npos);
-  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: down, position: [0.3, 0, 1.6], pitch_deg: -60}\n").find("pitch_deg = -60 is out of range"),
+  EXPECT_NE(errorOf(dir, "cameras:\n  - {name: down, position: [0.3, 0, 1.6], pitch_deg: -60}\n")
+                .find("pitch_deg = -60 is out of range"),
             std::string::npos);
 }
 
@@ -117,12 +125,14 @@ TEST(SimConfigTest, BadFilesAreNamedWithTheLineAndField) {
   EXPECT_NE(errorOf(dir, "robot:\n  sped: 1\n").find("sim.yaml:2: unknown setting 'robot.sped'"), std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar:\n  max_range: far\n").find("'lidar.max_range' has a bad value"), std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar: [1, 2\n").find("not valid YAML"), std::string::npos);
-  EXPECT_NE(errorOf(dir, "camera:\n  fovy_deg: 200\n").find("camera.fovy_deg = 200 is out of range (allowed: (0, 180) deg)"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf(dir, "camera:\n  fovy_deg: 200\n").find("camera.fovy_deg = 200 is out of range (allowed: (0, 180) deg)"),
+      std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar:\n  max_range: -1\n").find("lidar.max_range"), std::string::npos);
   EXPECT_EQ(errorOf(dir, "# all defaults\n"), "");
   // a key given twice (YAML keeps both; which one counts would be a guess)
-  EXPECT_NE(errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n").find("sim.yaml:3: 'robot.speed' is given twice (first on line 2)"),
+  EXPECT_NE(errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n")
+                .find("sim.yaml:3: 'robot.speed' is given twice (first on line 2)"),
             std::string::npos)
       << errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n");
   EXPECT_NE(errorOf(dir, "seed: 1\nrobot:\n  speed: 1\nseed: 2\n").find("'seed' is given twice"), std::string::npos);

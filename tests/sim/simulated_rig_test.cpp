@@ -8,9 +8,9 @@
 #include "sim/camera.hpp"
 #include "tests/test_support.hpp"
 
+#include <gtest/gtest.h>
 #include <GeographicLib/LocalCartesian.hpp>
 #include <opencv2/core.hpp>
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
@@ -115,7 +115,10 @@ TEST(SimulatedRigTest, SurroundRigCoversTheWholeHorizon) {
   for (int a = 0; a < 360; ++a) {
     const Vector3 dir(std::cos(a * M_PI / 180), std::sin(a * M_PI / 180), 0);
     bool seen = false;
-    for (const auto& c : cal.cameras) seen = seen || project(c.intrinsics, c.vehicle_from_camera.inverse() * (c.vehicle_from_camera.translation() + 10 * dir)).has_value();
+    for (const auto& c : cal.cameras)
+      seen = seen ||
+             project(c.intrinsics, c.vehicle_from_camera.inverse() * (c.vehicle_from_camera.translation() + 10 * dir))
+                 .has_value();
     EXPECT_TRUE(seen) << a << " deg";
   }
 }
@@ -153,7 +156,8 @@ TEST(SimulatedRigTest, GpsConvertsBackToTheTruePositionWithinItsNoise) {
     for (const auto& fix : f->sensors.gps) {
       double x, y, z;
       enu.Forward(fix.latitude_deg, fix.longitude_deg, fix.altitude_m, x, y, z);
-      const Vector3 truth = rig.trajectory().worldFromVehicle(fix.time) * rig.calibration().vehicle_from_gps.translation();
+      const Vector3 truth =
+          rig.trajectory().worldFromVehicle(fix.time) * rig.calibration().vehicle_from_gps.translation();
       EXPECT_LT(std::abs(x - truth.x()), 5 * 0.05);
       EXPECT_LT(std::abs(y - truth.y()), 5 * 0.05);
       EXPECT_LT(std::abs(z - truth.z()), 5 * 0.1);
@@ -255,7 +259,8 @@ TEST(SimulatedRigTest, RecordedDatasetReadsBackFrameForFrameIdentical) {
   ASSERT_EQ(source.calibration().cameras.size(), rig.calibration().cameras.size());
   for (std::size_t c = 0; c < rig.calibration().cameras.size(); ++c) {
     EXPECT_EQ(source.calibration().cameras[c].name, rig.calibration().cameras[c].name);
-    EXPECT_TRUE(source.calibration().cameras[c].vehicle_from_camera.isApprox(rig.calibration().cameras[c].vehicle_from_camera, 0));
+    EXPECT_TRUE(source.calibration().cameras[c].vehicle_from_camera.isApprox(
+        rig.calibration().cameras[c].vehicle_from_camera, 0));
     EXPECT_EQ(source.calibration().cameras[c].intrinsics.fx, rig.calibration().cameras[c].intrinsics.fx);
   }
   EXPECT_EQ(source.lasers().laserCount(), 64);
@@ -290,7 +295,8 @@ TEST(SimulatedRigTest, RecordedDatasetReadsBackFrameForFrameIdentical) {
       EXPECT_EQ(b.images[c].time, a.images[c].time);
       EXPECT_EQ(cv::norm(a.images[c].rgb, b.images[c].rgb, cv::NORM_INF), 0.0);
       EXPECT_EQ(cv::norm(live->truth->cameras[c].depth, read->truth->cameras[c].depth, cv::NORM_INF), 0.0);
-      EXPECT_EQ(cv::norm(live->truth->cameras[c].segmentation, read->truth->cameras[c].segmentation, cv::NORM_INF), 0.0);
+      EXPECT_EQ(cv::norm(live->truth->cameras[c].segmentation, read->truth->cameras[c].segmentation, cv::NORM_INF),
+                0.0);
     }
     ASSERT_EQ(live->truth->poses.size(), read->truth->poses.size());
     for (std::size_t i = 0; i < live->truth->poses.size(); ++i) {
@@ -311,7 +317,8 @@ TEST(SimulatedRigTest, CameraFrameShowsTheTopsTheLidarMisses) {
   for (const auto& p : f->sensors.sweep.points) highest_lidar = std::max(highest_lidar, static_cast<double>(p.z));
   EXPECT_LE(highest_lidar, 1.5);
   const CameraIntrinsics& k = rig.calibration().cameras.at(0).intrinsics;
-  const Pose world_from_camera = rig.trajectory().worldFromVehicle(0) * rig.calibration().cameras.at(0).vehicle_from_camera;
+  const Pose world_from_camera =
+      rig.trajectory().worldFromVehicle(0) * rig.calibration().cameras.at(0).vehicle_from_camera;
   double highest_seen = -1e9;
   for (int v = 0; v < k.height; ++v) {
     for (int u = 0; u < k.width; ++u) {
