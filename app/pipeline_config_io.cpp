@@ -40,6 +40,8 @@ std::map<std::string, Setter> fields(PipelineConfig& c) {
       {"ground.delta", num(c.ground.delta)},
       {"ground.range_margin", num(c.ground.range_margin)},
       {"ground.stack_height", num(c.ground.stack_height)},
+      {"ground.stack_gap", num(c.ground.stack_gap)},
+      {"ground.depth_below", num(c.ground.depth_below)},
       {"ground.tile_size", num(c.ground.tile_size)},
       {"ground.tile_radius", integer(c.ground.tile_radius)},
       {"ground.histogram_stride", integer(c.ground.histogram_stride)},
@@ -147,6 +149,9 @@ void validate(const PipelineConfig& c) {
           "(0, 20] m");
   require(c.ground.stack_height >= 0 && c.ground.stack_height <= 10, "ground.stack_height", c.ground.stack_height,
           "0 (off) or (0, 10] m");
+  require(c.ground.stack_gap >= 0 && c.ground.stack_gap <= 5, "ground.stack_gap", c.ground.stack_gap, "[0, 5] m");
+  require(c.ground.depth_below >= 0 && c.ground.depth_below <= 100, "ground.depth_below", c.ground.depth_below,
+          "0 (off) or (0, 100] m");
   require(c.ground.tile_size >= 1 && c.ground.tile_size <= 1000, "ground.tile_size", c.ground.tile_size, "[1, 1000] m");
   require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius,
           "[0, 10]");
@@ -267,6 +272,8 @@ std::string pipelineConfigToJson(const PipelineConfig& c) {
                  {"delta", c.ground.delta},
                  {"range_margin", c.ground.range_margin},
                  {"stack_height", c.ground.stack_height},
+                 {"stack_gap", c.ground.stack_gap},
+                 {"depth_below", c.ground.depth_below},
                  {"tile_size", c.ground.tile_size},
                  {"tile_radius", c.ground.tile_radius},
                  {"histogram_stride", c.ground.histogram_stride},

@@ -970,6 +970,9 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
     const float* const heights = layout.heights();
     const double delta = cfg.delta, range_margin = cfg.range_margin, alpha = cfg.alpha;
     const float stack_height = static_cast<float>(cfg.stack_height);
+    // a stack's next voxel lies at most this many grid steps above the one below it
+    const std::int32_t stack_step = 1 + static_cast<std::int32_t>(std::floor(cfg.stack_gap / cell + 1e-6));
+    const double depth_below = cfg.depth_below;
     const Plane plane = ws.planes[t];
     const auto& tile = layout.tiles()[t];
     layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
@@ -978,11 +981,14 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
       const bool on_edge = lx == 0 || ly == 0 || lx == k - 1 || ly == k - 1;
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];
-        Unary u = unary(h - ground, delta, range_margin, alpha);
-        // the foot of something upright: an unbroken stack of the column's voxels (sorted
-        // upwards) rises from it
+        double d = h - ground;
+        // the lowest voxel of its column, below the plane: nothing is seen under the ground
+        if (q == b && d < -delta && d >= -depth_below) d = 0;
+        Unary u = unary(d, delta, range_margin, alpha);
+        // the foot of something upright: a stack of the column's voxels (sorted upwards) rises
+        // from it, starting right above it and with gaps of at most stack_gap further up
         if (stack_height > 0) {
-          for (auto r = q + 1; r < e && zs[r] == zs[r - 1] + 1; ++r) {
+          for (auto r = q + 1; r < e && zs[r] <= zs[r - 1] + (r == q + 1 ? 1 : stack_step); ++r) {
             if (heights[r] - h > stack_height) {
               u = {false, static_cast<float>(2 * alpha)};
               break;

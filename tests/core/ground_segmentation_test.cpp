@@ -156,6 +156,82 @@ TEST(GroundSegmentationTest, GroundUnderAnOverhangStaysGround) {
   }
 }
 
+// A wall sampled ring by ring, as a single far scan sees it: its column holds the foot, the voxel
+// right above it and then every second voxel up to 1.9 m. With ground.stack_gap (0.2 m: one empty
+// voxel) the foot is non-ground; with an unbroken stack required (0) it is ground, as the paper's
+// terms make it. The wall is two voxels thick so that the GMRF's smoothing keeps its feet.
+TEST(GroundSegmentationTest, AWallSampledRingByRingIsAStack) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, 0.05);
+      if (x < 5 || x > 6 || y < 0 || y >= 10) continue;
+      for (const int z : {1, 3, 5, 7, 9}) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, z * 0.2 + 0.1);
+    }
+  }
+  map.insert(pts, 0);
+  GroundSegmentationConfig cfg;
+  ASSERT_NEAR(cfg.stack_gap, 0.2, 1e-12);  // the default
+  const SegmentationResult with = segmentGround(map, cfg);
+  cfg.stack_gap = 0;
+  const SegmentationResult without = segmentGround(map, cfg);
+  std::size_t feet = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const VoxelIndex& v = map.voxels()[i].index;
+    if (v.z() != 0) continue;
+    if (v.x() >= 5 && v.x() <= 6 && v.y() >= 0 && v.y() < 10) {
+      ++feet;
+      EXPECT_EQ(with.rough[i], 0) << v.transpose();
+      EXPECT_EQ(with.refined[i], 0) << v.transpose();
+      EXPECT_EQ(without.rough[i], 1) << v.transpose();  // its stack stops at 0.2 m
+    } else {
+      EXPECT_EQ(with.refined[i], 1) << v.transpose();
+    }
+  }
+  EXPECT_EQ(feet, 20u);
+}
+
+// Flat ground with a ditch 0.8 m deep and 2 m wide: the plane and the histogram follow the flat
+// ground (z = 0), so the ditch's floor lies 0.8 m below h1, outside the band of +-0.3 m. Being
+// the lowest voxels of their columns, below the plane, they are ground with ground.depth_below at
+// 2 m, non-ground without it (0, the default). A voxel 0.2 m above the floor, as low below the plane
+// but not the lowest of its column, stays non-ground.
+TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  auto ditch = [](int x, int y) { return x >= 0 && x < 10 && y >= -20 && y < 20; };
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      const double floor = ditch(x, y) ? -0.75 : 0.05;
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, floor);
+      if (ditch(x, y) && x == 4 && y == 0) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, floor + 0.2);
+    }
+  }
+  map.insert(pts, 0);
+  GroundSegmentationConfig cfg;
+  cfg.depth_below = 2.0;
+  const SegmentationResult with = segmentGround(map, cfg);
+  cfg.depth_below = 0;
+  const SegmentationResult without = segmentGround(map, cfg);
+  std::size_t floor_voxels = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const VoxelIndex& v = map.voxels()[i].index;
+    const bool in_ditch = ditch(v.x(), v.y());
+    if (in_ditch && v.z() == -4) {
+      ++floor_voxels;
+      EXPECT_EQ(with.rough[i], 1) << v.transpose();
+      EXPECT_EQ(with.refined[i], 1) << v.transpose();
+      EXPECT_EQ(without.rough[i], 0) << v.transpose();
+    } else if (in_ditch) {
+      EXPECT_EQ(with.refined[i], 0) << v.transpose();  // the voxel above the floor
+    } else {
+      EXPECT_EQ(with.refined[i], 1) << v.transpose();
+    }
+  }
+  EXPECT_EQ(floor_voxels, 400u);
+}
+
 TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const int n = 14;

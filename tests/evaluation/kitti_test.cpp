@@ -16,9 +16,10 @@ namespace {
 const std::filesystem::path kData = std::filesystem::path(TERRAIN_SOURCE_DIR) / "tests" / "data" / "semantickitti";
 
 // the method on the two real HDL-64E scans: a guard on real data, at today's F1 less 0.002
-// (2026-12-03: 0.977 and 0.967 with the stack test; 0.964 and 0.940 without it)
+// (2026-12-04: 0.978 and 0.969 with the stack test and its gaps; 0.977 and 0.967 with the
+// unbroken stack test; 0.964 and 0.940 without it)
 TEST(KittiTest, GroundSegmentationOfRealScans) {
-  const std::map<std::string, double> floor = {{"000000", 0.975}, {"000020", 0.965}};
+  const std::map<std::string, double> floor = {{"000000", 0.976}, {"000020", 0.967}};
   for (const char* name : {"000000", "000020"}) {
     const rig::KittiScan scan = rig::readKittiScan(kData / (std::string(name) + ".bin"));
     const auto labels = rig::readSemanticKittiLabels(kData / (std::string(name) + ".label"), scan.points.size());
@@ -28,7 +29,7 @@ TEST(KittiTest, GroundSegmentationOfRealScans) {
     for (auto l : labels) truth.push_back(rig::isKittiGround(l)), skip.push_back(rig::isKittiIgnored(l));
     const BinaryScores s = binaryScores(p, truth, skip);
     EXPECT_GE(s.f1, floor.at(name)) << name;
-    EXPECT_GT(s.recall, 0.95) << name;
+    EXPECT_GT(s.recall, 0.96) << name;
   }
 }
 
