@@ -1,4 +1,4 @@
-// Benchmarks for the performance targets (README, "Performance"). Run through scripts/bench, which
+// Benchmarks for the performance targets (docs/performance.md). Run through scripts/bench, which
 // builds Release; the table at the end gives each figure's median, its target and, where there is
 // one, the ratio against a baseline measured in the same run.
 #include "app/bounded_queue.hpp"
