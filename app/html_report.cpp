@@ -3,6 +3,7 @@
 #include "app/outputs.hpp"
 #include "app/report_view.hpp"
 #include "core/camera_model.hpp"
+#include "evaluation/metrics.hpp"
 #include "evaluation/report.hpp"
 
 #include <algorithm>
@@ -49,6 +50,7 @@ cv::Mat lineChart(const std::vector<std::pair<std::string, std::vector<double>>>
     for (double x : v) ymax = std::max(ymax, x * 1.1);
     n = std::max(n, v.size());
   }
+  if (!(ymax > 0)) ymax = 1;  // nothing above zero to show
   cv::line(c, {l, h - b}, {w - 10, h - b}, cv::Scalar(0, 0, 0));
   cv::line(c, {l, t}, {l, h - b}, cv::Scalar(0, 0, 0));
   auto py = [&](double y) { return static_cast<int>(h - b - (h - b - t) * y / ymax); };
@@ -136,7 +138,7 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   }
   h << "<h2>Ground segmentation</h2><table><tr><th>method</th><th>F1</th><th>IoU</th><th>precision</th><th>recall</th>"
        "<th>F1 per point</th></tr>";
-  for (const char* m : {"histogram", "gmrf_icm", "gmrf_mincut", "fixed_band", "ransac_plane", "morphological_filter"}) {
+  for (const char* m : eval::kGroundMethods) {
     if (!r["ground_segmentation"].contains(m)) continue;  // baselines not asked for
     const auto& g = r["ground_segmentation"][m];
     h << "<tr><td style=\"text-align:left\">" << m << "</td><td>" << fmt(g["f1"]) << "</td><td>" << fmt(g["iou"])
@@ -278,11 +280,14 @@ std::string htmlReport(const nlohmann::json& r, const Pipeline& p, const eval::R
   }
   // timing (Figure 11)
   std::vector<double> total, seg, voxels;
+  const double period_ms = eval::sensingPeriodMs(p.records());
   for (const auto& rec : p.records())
     total.push_back(rec.total_ms), seg.push_back(rec.segmentation_ms), voxels.push_back(rec.voxels / 1000.0);
   h << "<h2>Timing per frame</h2>"
-    << img(lineChart({{"total", total}, {"ground segmentation", seg}}, 100.0,
-                     "processing time per frame (red: 100 ms sensing period)", "ms"),
+    << img(lineChart(
+               {{"total", total}, {"ground segmentation", seg}}, period_ms,
+               "processing time per frame (red: the sensing period, " + std::to_string(std::lround(period_ms)) + " ms)",
+               "ms"),
            "timing")
     << img(lineChart({{"voxels in the map (thousands)", voxels}}, 0.0, "voxels", "k"), "voxels")
     << "<table><tr><th>stage</th><th>median ms</th><th>p95 ms</th></tr>";

@@ -1,5 +1,6 @@
 #include "app/lidar_commands.hpp"
 
+#include "app/command.hpp"
 #include "app/interrupt.hpp"
 
 #include "rig/file_io.hpp"
@@ -93,6 +94,19 @@ nlohmann::json captureJson(const rig::CaptureScan& scan) {
 }
 
 namespace {
+
+// The options of both subcommands, filled by CLI11.
+struct LidarCommands {
+  CLI::App* inspect = nullptr;
+  CLI::App* convert = nullptr;
+  std::string file;         // inspect: the capture
+  std::string pcap;         // convert: the capture
+  std::string calibration;  // empty: the shipped table of the model found
+  std::string time_base = "auto";
+  std::string json;  // inspect --json FILE ("-": stdout instead of the text)
+  std::string out;   // convert --out
+  bool force = false, kitti = false, strict = false;
+};
 
 // UTC text of a time [s since 1970], or the seconds alone for a time within the first day
 std::string timeText(double t) {
@@ -223,48 +237,52 @@ int convert(const LidarCommands& c) {
   return 0;
 }
 
+class LidarCommand : public Command {
+ public:
+  explicit LidarCommand(CLI::App& app)
+      : Command(
+            app.add_subcommand("lidar", "a real Velodyne capture on its own: inspect it, convert it to point clouds")) {
+    cli_->require_subcommand(1);
+    LidarCommands* c = &c_;
+    const std::string calibration_help =
+        "laser calibration (ROS YAML or db.xml); default: the table shipped for the model the packets show "
+        "(HDL-64E S2.1 or HDL-32E); one with another number of lasers is refused";
+    const std::string time_help =
+        "[s] added to the packets' time since the top of the hour; auto: the hour of the position packets' GPS "
+        "time, else of the capture clock";
+    c->inspect = cli_->add_subcommand("inspect",
+                                      "what a capture holds: sensor model, packets, sweeps, points, spin rate, "
+                                      "return mode, time span and base, GPS fixes, every counter");
+    c->inspect->add_option("FILE", c->file, "pcap capture")->required();
+    c->inspect->add_option("--calibration", c->calibration, calibration_help);
+    c->inspect->add_option("--lidar-time-base", c->time_base, time_help)->capture_default_str();
+    c->inspect->add_option("--json", c->json,
+                           "also write it all as JSON to this file; '-' prints the JSON instead of the text");
+    c->inspect->add_flag("--force", c->force, "replace an existing --json file");
+    c->inspect->add_flag("--strict", c->strict, "a cut-off capture is an error (exit 2), not a warning");
+    c->convert = cli_->add_subcommand("convert",
+                                      "decode a capture into one PCD per sweep (x y z intensity ring azimuth "
+                                      "time), sweeps.csv, gps.csv and capture.json");
+    c->convert->add_option("--pcap", c->pcap, "pcap capture")->required();
+    c->convert->add_option("--out", c->out, "output directory (built beside it and moved into place when complete)")
+        ->required();
+    c->convert->add_option("--calibration", c->calibration, calibration_help);
+    c->convert->add_option("--lidar-time-base", c->time_base, time_help)->capture_default_str();
+    c->convert->add_flag("--kitti", c->kitti, "also write KITTI .bin scans (float32 x y z reflectance) in OUT/kitti/");
+    c->convert->add_flag("--force", c->force,
+                         "replace an existing, non-empty --out directory (whole, once the new one is complete)");
+    c->convert->add_flag("--strict", c->strict,
+                         "a cut-off capture is an error (exit 2, nothing written), not a warning");
+  }
+
+  int run() override { return c_.inspect->parsed() ? inspect(c_) : convert(c_); }
+
+ private:
+  LidarCommands c_;
+};
+
 }  // namespace
 
-std::unique_ptr<LidarCommands> addLidarCommands(CLI::App& app) {
-  auto c = std::make_unique<LidarCommands>();
-  CLI::App* lidar =
-      app.add_subcommand("lidar", "a real Velodyne capture on its own: inspect it, convert it to point clouds");
-  lidar->require_subcommand(1);
-  const std::string calibration_help =
-      "laser calibration (ROS YAML or db.xml); default: the table shipped for the model the packets show "
-      "(HDL-64E S2.1 or HDL-32E); one with another number of lasers is refused";
-  const std::string time_help =
-      "[s] added to the packets' time since the top of the hour; auto: the hour of the position packets' GPS time, "
-      "else of the capture clock";
-  c->inspect = lidar->add_subcommand("inspect",
-                                     "what a capture holds: sensor model, packets, sweeps, points, spin rate, "
-                                     "return mode, time span and base, GPS fixes, every counter");
-  c->inspect->add_option("FILE", c->file, "pcap capture")->required();
-  c->inspect->add_option("--calibration", c->calibration, calibration_help);
-  c->inspect->add_option("--lidar-time-base", c->time_base, time_help)->capture_default_str();
-  c->inspect->add_option("--json", c->json,
-                         "also write it all as JSON to this file; '-' prints the JSON instead of the text");
-  c->inspect->add_flag("--force", c->force, "replace an existing --json file");
-  c->inspect->add_flag("--strict", c->strict, "a cut-off capture is an error (exit 2), not a warning");
-  c->convert = lidar->add_subcommand("convert",
-                                     "decode a capture into one PCD per sweep (x y z intensity ring azimuth "
-                                     "time), sweeps.csv, gps.csv and capture.json");
-  c->convert->add_option("--pcap", c->pcap, "pcap capture")->required();
-  c->convert->add_option("--out", c->out, "output directory (built beside it and moved into place when complete)")
-      ->required();
-  c->convert->add_option("--calibration", c->calibration, calibration_help);
-  c->convert->add_option("--lidar-time-base", c->time_base, time_help)->capture_default_str();
-  c->convert->add_flag("--kitti", c->kitti, "also write KITTI .bin scans (float32 x y z reflectance) in OUT/kitti/");
-  c->convert->add_flag("--force", c->force,
-                       "replace an existing, non-empty --out directory (whole, once the new one is complete)");
-  c->convert->add_flag("--strict", c->strict, "a cut-off capture is an error (exit 2, nothing written), not a warning");
-  return c;
-}
-
-int runLidarCommands(const LidarCommands& c) {
-  if (c.inspect->parsed()) return inspect(c);
-  if (c.convert->parsed()) return convert(c);
-  return -1;
-}
+std::unique_ptr<Command> addLidarCommand(CLI::App& app) { return std::make_unique<LidarCommand>(app); }
 
 }  // namespace terrain::app

@@ -1,5 +1,6 @@
 #pragma once
-// 'terrain lidar': a real Velodyne capture on its own, with no simulated part.
+// 'terrain lidar': a real Velodyne capture on its own, with no simulated part (the command is added
+// by app::addLidarCommand, app/command.hpp).
 //   lidar inspect FILE.pcap   what the capture holds: sensor model (from the data), packets,
 //                             sweeps, points, spin rate, return mode, time span and base, GPS
 //                             fixes of its position packets, every counter (text, --json)
@@ -9,33 +10,12 @@
 
 #include "rig/velodyne_capture.hpp"
 
-#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <memory>
+#include <optional>
 #include <string>
 
 namespace terrain::app {
-
-// The options of both subcommands, filled by CLI11.
-struct LidarCommands {
-  CLI::App* inspect = nullptr;
-  CLI::App* convert = nullptr;
-  std::string file;         // inspect: the capture
-  std::string pcap;         // convert: the capture
-  std::string calibration;  // empty: the shipped table of the model found
-  std::string time_base = "auto";
-  std::string json;  // inspect --json FILE ("-": stdout instead of the text)
-  std::string out;   // convert --out
-  bool force = false, kitti = false, strict = false;
-};
-
-// Adds 'terrain lidar inspect' and 'terrain lidar convert' to app.
-std::unique_ptr<LidarCommands> addLidarCommands(CLI::App& app);
-
-// Runs whichever was parsed; returns the exit code (0, or 2 after printing why). Returns -1 if
-// neither was.
-int runLidarCommands(const LidarCommands& commands);
 
 // A capture's scan as JSON (the content of --json and capture.json).
 nlohmann::json captureJson(const rig::CaptureScan& scan);

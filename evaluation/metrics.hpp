@@ -3,10 +3,17 @@
 
 #include "core/types.hpp"
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
 namespace terrain::eval {
+
+// The ground segmentations a report scores, by their key in report.json's ground_segmentation and
+// in 'terrain kitti''s output: the method's rough classes, its GMRF by ICM and by min-cut, then the
+// baselines (a fixed band, a RANSAC plane, PCL's progressive morphological filter).
+inline constexpr std::array<const char*, 6> kGroundMethods = {"histogram",  "gmrf_icm",     "gmrf_mincut",
+                                                              "fixed_band", "ransac_plane", "morphological_filter"};
 
 // Scores of a binary classification (the positive class is ground).
 struct BinaryScores {

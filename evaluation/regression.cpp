@@ -1,5 +1,6 @@
 #include "evaluation/regression.hpp"
 
+#include "evaluation/metrics.hpp"
 #include "rig/file_io.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -264,15 +265,13 @@ void printTable(std::ostream& out, const RegressionResult& r) {
 }
 
 std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
-  static const char* methods[] = {"histogram",  "gmrf_icm",     "gmrf_mincut",
-                                  "fixed_band", "ransac_plane", "morphological_filter"};
   std::ostringstream h;
   h << std::fixed << std::setprecision(3) << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>suite "
     << suite.name
     << "</title><style>body{font-family:sans-serif}table{border-collapse:collapse}td,th{border:1px solid #bbb;"
        "padding:3px 8px;text-align:right}th{background:#eee}</style></head><body><h1>Suite "
     << suite.name << "</h1><h2>Ground segmentation F1 per voxel</h2><table><tr><th>scenario</th>";
-  for (const char* m : methods) h << "<th>" << m << "</th>";
+  for (const char* m : kGroundMethods) h << "<th>" << m << "</th>";
   h << "</tr>";
   auto value = [&](const std::map<std::string, double>& r, const std::string& k) -> std::string {
     auto it = r.find(k);
@@ -283,7 +282,8 @@ std::string suiteSummaryHtml(const Suite& suite, const Results& results) {
   };
   for (const auto& [scenario, r] : results) {
     h << "<tr><td style=\"text-align:left\">" << scenario << "</td>";
-    for (const char* m : methods) h << "<td>" << value(r, std::string("ground_segmentation.") + m + ".f1") << "</td>";
+    for (const char* m : kGroundMethods)
+      h << "<td>" << value(r, std::string("ground_segmentation.") + m + ".f1") << "</td>";
     h << "</tr>";
   }
   h << "</table><h2>Object heights and boundaries</h2><table><tr><th>scenario</th><th>MAE sensed m</th><th>MAE after "

@@ -217,6 +217,15 @@ json poseJson(const Pipeline& pipeline, const RunTruth& truth) {
           {"pitch_error_deg", stats(pitch)},     {"roll_error_deg", stats(roll)}};
 }
 
+double sensingPeriodMs(const std::vector<FrameRecord>& records) {
+  std::vector<double> starts;
+  for (const auto& r : records) starts.push_back(r.time);
+  std::sort(starts.begin(), starts.end());
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < starts.size(); ++i) gaps.push_back(1000.0 * (starts[i] - starts[i - 1]));
+  return gaps.empty() ? 0.0 : percentiles(gaps).median;
+}
+
 json timingJson(const std::vector<FrameRecord>& records) {
   std::map<std::string, std::vector<double>> stages;
   for (const auto& r : records) {
@@ -233,8 +242,12 @@ json timingJson(const std::vector<FrameRecord>& records) {
     const Percentiles p = percentiles(values);
     j[name] = {{"median_ms", p.median}, {"p95_ms", p.p95}};
   }
+  const double period = sensingPeriodMs(records);
   std::size_t over = 0;
-  for (double t : stages["total"]) over += t > 100.0;
+  if (period > 0) {
+    for (double t : stages["total"]) over += t > period;
+  }
+  j["sensing_period_ms"] = period;
   j["frames_over_sensing_period"] = over;
   return j;
 }

@@ -98,7 +98,12 @@ std::map<std::string, double> flattenMetrics(const nlohmann::json& report);
 // and heading, pitch and roll errors [deg] (eval::poseError).
 nlohmann::json poseJson(const Pipeline& pipeline, const RunTruth& truth);
 
-// Timing summary of a pipeline's records: stage -> (median, p95) [ms].
+// [ms] the rig's sensing period: the median time between the starts of consecutive sweeps (100 ms
+// at the HDL-64E's 10 Hz); 0 with fewer than two frames.
+double sensingPeriodMs(const std::vector<FrameRecord>& records);
+
+// Timing summary of a pipeline's records: stage -> (median, p95) [ms], the sensing period
+// (sensing_period_ms) and the frames whose processing took longer (frames_over_sensing_period).
 nlohmann::json timingJson(const std::vector<FrameRecord>& records);
 
 }  // namespace terrain::eval

@@ -235,5 +235,24 @@ TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtItItsLowerPartWhenIt
   }
 }
 
+// The sensing period is the rig's, from the sweeps' start times (in any order, with a late frame
+// among them), and frames are over it by their own total time.
+TEST(MetricsTest, TheSensingPeriodComesFromTheSweepsStartTimes) {
+  std::vector<FrameRecord> records;
+  for (const double t : {0.4, 0.0, 0.2, 0.6, 1.4, 0.8}) {  // a 5 Hz lidar; one sweep missing before 1.4 s
+    FrameRecord r;
+    r.time = t;
+    r.total_ms = t < 1.0 ? 150 : 250;
+    records.push_back(r);
+  }
+  EXPECT_NEAR(sensingPeriodMs(records), 200.0, 1e-9);
+  const nlohmann::json j = timingJson(records);
+  EXPECT_NEAR(j["sensing_period_ms"].get<double>(), 200.0, 1e-9);
+  EXPECT_EQ(j["frames_over_sensing_period"].get<std::size_t>(), 1u);
+  records.resize(1);
+  EXPECT_EQ(sensingPeriodMs(records), 0.0);  // one sweep: no period
+  EXPECT_EQ(timingJson(records)["frames_over_sensing_period"].get<std::size_t>(), 0u);
+}
+
 }  // namespace
 }  // namespace terrain::eval

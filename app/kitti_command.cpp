@@ -1,0 +1,93 @@
+// 'terrain kitti': the ground segmentation scored on real KITTI HDL-64E scans against their
+// SemanticKITTI labels, beside the ground baselines, with where the method errs.
+#include "app/cli_options.hpp"
+#include "app/command.hpp"
+#include "app/pipeline_config_io.hpp"
+#include "evaluation/kitti.hpp"
+#include "evaluation/metrics.hpp"
+#include "rig/file_io.hpp"
+#include "rig/kitti.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <iomanip>
+#include <iostream>
+
+namespace terrain::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+class KittiCommand : public Command {
+ public:
+  explicit KittiCommand(CLI::App& app)
+      : Command(app.add_subcommand("kitti",
+                                   "score ground segmentation on real KITTI HDL-64E scans with SemanticKITTI labels")) {
+    cli_->add_option("--scan", scans_, "KITTI .bin scan(s); labels are read from the .label file beside each")
+        ->required();
+    cli_->add_option("--sensor-height", sensor_height_, "lidar height above the road [m]")->capture_default_str();
+    cli_->add_option("--json", json_, "also write the scores as JSON");
+    addPipelineOptions(*cli_, config_, true);
+  }
+
+  int run() override {
+    validate(config_);
+    nlohmann::json all;
+    std::cout << std::fixed << std::setprecision(3)
+              << "scan          method                 F1     IoU    precision recall\n";
+    for (const auto& scan_path : scans_) {
+      const rig::KittiScan scan = rig::readKittiScan(scan_path);
+      fs::path label_path = scan_path;
+      label_path.replace_extension(".label");
+      const auto labels = rig::readSemanticKittiLabels(label_path, scan.points.size());
+      const auto j = eval::scoreKittiScan(scan.points, labels, config_.voxel_map, config_.ground, sensor_height_);
+      for (const char* m : eval::kGroundMethods) {
+        std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22) << m << std::right
+                  << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  "
+                  << j[m]["precision"].get<double>() << "     " << j[m]["recall"].get<double>() << "\n";
+      }
+      // where the configured solver calls ground wrongly
+      const auto& conf = j["confusion"];
+      std::vector<std::pair<std::uint64_t, std::string>> wrong;
+      for (auto it = conf["by_class"].begin(); it != conf["by_class"].end(); ++it) {
+        const std::string name = it.key();
+        if (name == "road" || name == "parking" || name == "sidewalk" || name == "other-ground" || name == "terrain" ||
+            name == "vegetation")
+          continue;
+        const auto n = it.value()["labelled_ground"].get<std::uint64_t>();
+        if (n > 0) wrong.emplace_back(n, name);
+      }
+      std::sort(wrong.rbegin(), wrong.rend());
+      std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::right << "false ground ("
+                << conf["method"].get<std::string>() << ") by class:";
+      for (const auto& [n, name] : wrong) {
+        std::cout << " " << name << " " << n << "/" << conf["by_class"][name]["points"].get<std::uint64_t>();
+      }
+      std::cout << "\n"
+                << std::left << std::setw(14) << scan_path.stem().string() << std::right
+                << "false / missed ground by distance:";
+      for (auto it = conf["by_distance"].begin(); it != conf["by_distance"].end(); ++it) {
+        std::cout << " " << it.key() << " m " << it.value()["false_ground"].get<std::uint64_t>() << " / "
+                  << it.value()["missed_ground"].get<std::uint64_t>();
+      }
+      std::cout << "\n";
+      all[scan_path.stem().string()] = j;
+    }
+    if (!json_.empty()) io::writeFileAtomic(json_, all.dump(1) + "\n", false);
+    return 0;
+  }
+
+ private:
+  std::vector<fs::path> scans_;
+  fs::path json_;
+  double sensor_height_ = 1.73;
+  PipelineConfig config_;
+};
+
+}  // namespace
+
+std::unique_ptr<Command> addKittiCommand(CLI::App& app) { return std::make_unique<KittiCommand>(app); }
+
+}  // namespace terrain::app
