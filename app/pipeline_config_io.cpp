@@ -6,353 +6,304 @@
 #include <yaml-cpp/yaml.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+#include <limits>
 #include <map>
+#include <sstream>
+#include <utility>
+#include <vector>
 
 namespace terrain::app {
 
 namespace {
 
-using io::Setter;
-constexpr auto require = io::requireInRange;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::map<std::string, Setter> fields(PipelineConfig& c) {
-  const auto num = io::numberSetter;
-  const auto integer = io::integerSetter;
-  return {
-      {"segment_every", integer(c.segment_every)},
-      {"pose.heading_baseline", num(c.pose.heading_baseline)},
-      {"pose.level_min_range", num(c.pose.level_min_range)},
-      {"pose.level_max_range", num(c.pose.level_max_range)},
-      {"pose.level_pitch_sigma", num(c.pose.level_pitch_sigma)},
-      {"pose.max_speed", num(c.pose.max_speed)},
-      {"voxel_map.voxel_size", num(c.voxel_map.voxel_size)},
-      {"ground.histogram",
-       [&c](const YAML::Node& n) {
-         if (!parseHistogram(n.as<std::string>(), c.ground.histogram))
-           throw YAML::Exception(n.Mark(), "expected global or local");
-       }},
-      {"ground.solver",
-       [&c](const YAML::Node& n) {
-         if (!parseSolver(n.as<std::string>(), c.ground.solver))
-           throw YAML::Exception(n.Mark(), "expected icm or mincut");
-       }},
-      {"ground.bin_size", num(c.ground.bin_size)},
-      {"ground.delta", num(c.ground.delta)},
-      {"ground.range_margin", num(c.ground.range_margin)},
-      {"ground.stack_height", num(c.ground.stack_height)},
-      {"ground.stack_gap", num(c.ground.stack_gap)},
-      {"ground.depth_below", num(c.ground.depth_below)},
-      {"ground.tile_size", num(c.ground.tile_size)},
-      {"ground.tile_radius", integer(c.ground.tile_radius)},
-      {"ground.histogram_stride", integer(c.ground.histogram_stride)},
-      {"ground.alpha", num(c.ground.alpha)},
-      {"ground.beta", num(c.ground.beta)},
-      {"ground.gamma", num(c.ground.gamma)},
-      {"ground.icm_iterations", integer(c.ground.icm_iterations)},
-      {"ground.threads", integer(c.ground.threads)},
-      {"ground.defer_share", num(c.ground.defer_share)},
-      {"boundary.a", num(c.boundary.a)},
-      {"boundary.b", num(c.boundary.b)},
-      {"boundary.kx", num(c.boundary.kx)},
-      {"boundary.ky", num(c.boundary.ky)},
-      {"boundary.threshold", num(c.boundary.threshold)},
-      {"boundary.erode_width", integer(c.boundary.erode_width)},
-      {"boundary.erode_height", integer(c.boundary.erode_height)},
-      {"boundary.dilate_width", integer(c.boundary.dilate_width)},
-      {"boundary.dilate_height", integer(c.boundary.dilate_height)},
-      {"boundary.erode_all_directions", [&c](const YAML::Node& n) { c.boundary.erode_all_directions = n.as<bool>(); }},
-      {"boundary.erode_sloping", [&c](const YAML::Node& n) { c.boundary.erode_sloping = n.as<bool>(); }},
-      {"boundary.foliage_margin", integer(c.boundary.foliage_margin)},
-      {"estimation.max_distance", num(c.estimation.max_distance)},
-      {"estimation.max_height", num(c.estimation.max_height)},
-      {"estimation.top_margin", integer(c.estimation.top_margin)},
-      {"estimation.fusion_quantile", num(c.estimation.fusion_quantile)},
-      {"estimation.max_estimates",
-       [&c](const YAML::Node& n) {
-         const int v = n.as<int>();
-         require(v >= 1 && v <= 1000, "estimation.max_estimates", v, "[1, 1000]");
-         c.estimation.max_estimates = static_cast<std::size_t>(v);
-       }},
-      {"estimation.clear_line", [&c](const YAML::Node& n) { c.estimation.clear_line = n.as<bool>(); }},
-      {"estimation.require_sky_above", [&c](const YAML::Node& n) { c.estimation.require_sky_above = n.as<bool>(); }},
-      {"estimation.sky_blue_margin", integer(c.estimation.sky_blue_margin)},
-      {"estimation.sky_min_brightness", integer(c.estimation.sky_min_brightness)},
-      {"estimation.foliage_tops", [&c](const YAML::Node& n) { c.estimation.foliage_tops = n.as<bool>(); }},
-      {"estimation.foliage_margin", integer(c.estimation.foliage_margin)},
-      {"estimation.spread_distance", num(c.estimation.spread_distance)},
-      {"estimation.parallax_slope", num(c.estimation.parallax_slope)},
-      {"estimation.parallax_change", num(c.estimation.parallax_change)},
-      {"estimation.parallax_min_gap", num(c.estimation.parallax_min_gap)},
-      {"estimation.parallax_max_gap", num(c.estimation.parallax_max_gap)},
-      {"estimation.parallax_min_t", num(c.estimation.parallax_min_t)},
-      {"estimation.hold_young_crowns", [&c](const YAML::Node& n) { c.estimation.hold_young_crowns = n.as<bool>(); }},
-      {"footprint.enabled", [&c](const YAML::Node& n) { c.footprint.enabled = n.as<bool>(); }},
-      {"footprint.min_side", num(c.footprint.min_side)},
-      {"footprint.wall_tolerance", num(c.footprint.wall_tolerance)},
-      {"footprint.wall_band", num(c.footprint.wall_band)},
-      {"footprint.min_wall_share", num(c.footprint.min_wall_share)},
-      {"footprint.min_side_support", num(c.footprint.min_side_support)},
-      {"footprint.max_inside_share", num(c.footprint.max_inside_share)},
-      {"footprint.min_raised", integer(c.footprint.min_raised)},
-      {"footprint.min_raised_share", num(c.footprint.min_raised_share)},
-      {"crown.enabled", [&c](const YAML::Node& n) { c.crown.enabled = n.as<bool>(); }},
-      {"hull.enabled", [&c](const YAML::Node& n) { c.hull.enabled = n.as<bool>(); }},
-      {"hull.cell", num(c.hull.cell)},
-      {"hull.layer", num(c.hull.layer)},
-      {"hull.max_height", num(c.hull.max_height)},
-      {"hull.max_radius", num(c.hull.max_radius)},
-      {"hull.max_distance", num(c.hull.max_distance)},
-      {"hull.min_views", integer(c.hull.min_views)},
-      {"hull.min_parallax", num(c.hull.min_parallax)},
-      {"hull.min_foliage_share", num(c.hull.min_foliage_share)},
-      {"hull.max_sky_share", num(c.hull.max_sky_share)},
-      {"hull.horizon_margin", num(c.hull.horizon_margin)},
-      {"hull.horizon_distance", num(c.hull.horizon_distance)},
-      {"free_space.enabled", [&c](const YAML::Node& n) { c.free_space.enabled = n.as<bool>(); }},
-      {"free_space.min_distance", num(c.free_space.min_distance)},
-      {"free_space.max_distance", num(c.free_space.max_distance)},
-      {"free_space.margin", num(c.free_space.margin)},
-      {"crown.cue",
-       [&c](const YAML::Node& n) {
-         if (!parseCrownCue(n.as<std::string>(), c.crown.cue))
-           throw YAML::Exception(n.Mark(), "expected foliage or sky");
-       }},
-      {"crown.foliage_margin", integer(c.crown.foliage_margin)},
-      {"crown.max_trunk_gap", num(c.crown.max_trunk_gap)},
-      {"crown.max_trunk_width", num(c.crown.max_trunk_width)},
-      {"crown.max_grown_width", num(c.crown.max_grown_width)},
-      {"crown.min_trunk_height", num(c.crown.min_trunk_height)},
-      {"crown.min_radius", num(c.crown.min_radius)},
-      {"crown.max_radius", num(c.crown.max_radius)},
-      {"crown.min_samples", integer(c.crown.min_samples)},
-      {"crown.max_top_spread", num(c.crown.max_top_spread)},
-      {"crown.min_height_px", integer(c.crown.min_height_px)},
-      {"crown.min_baseline", num(c.crown.min_baseline)},
-      {"crown.max_offcentre", num(c.crown.max_offcentre)},
-  };
+// The values a number may take: finite, from lo to hi, either end open or closed; with `off`, 0
+// too (the setting's "off").
+struct Range {
+  double lo = -kInf, hi = kInf;
+  bool lo_open = false, hi_open = false, off = false;
+  const char* unit = "";
+
+  bool contains(double v) const {
+    if (!std::isfinite(v)) return false;
+    if (off && v == 0) return true;
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+  // as error messages state it: "[0, 100] m", "> 0 m", "0 (off) or (0, 10] m"
+  std::string text() const {
+    const auto g = [](double x) {
+      std::ostringstream o;
+      o << x;
+      return o.str();
+    };
+    std::string t;
+    if (hi == kInf) {
+      t = (lo_open ? "> " : ">= ") + g(lo);
+    } else {
+      t = std::string(off ? "0 (off) or " : "") + (lo_open ? "(" : "[") + g(lo) + ", " + g(hi) + (hi_open ? ")" : "]");
+    }
+    return *unit ? t + " " + unit : t;
+  }
+};
+Range closed(double lo, double hi, const char* unit = "") { return {lo, hi, false, false, false, unit}; }
+Range openClosed(double lo, double hi, const char* unit = "") { return {lo, hi, true, false, false, unit}; }
+Range above(double lo, const char* unit = "") { return {lo, kInf, true, false, false, unit}; }
+Range atLeast(double lo, const char* unit = "") { return {lo, kInf, false, false, false, unit}; }
+Range offOr(double hi, const char* unit = "") { return {0, hi, true, false, true, unit}; }
+
+template <class E>
+using Choices = std::initializer_list<std::pair<const char*, E>>;
+
+// Every pipeline setting, once: its name (section.field, as in the YAML file, --set and
+// report.json), its member and the values it may take. Reading YAML and --set, validate() and the
+// JSON are all derived from this list; a setting added to a config struct is added here alone.
+// Relations between settings are checked in validate().
+template <class Visit>
+void forEachSetting(PipelineConfig& c, Visit&& v) {
+  using Histogram = GroundSegmentationConfig::Histogram;
+  using Solver = GroundSegmentationConfig::Solver;
+  v.integer("segment_every", c.segment_every, atLeast(1));
+  // pose
+  v.number("pose.heading_baseline", c.pose.heading_baseline, openClosed(0, 100, "m"));
+  v.number("pose.level_min_range", c.pose.level_min_range, closed(0, 1000, "m"));
+  v.number("pose.level_max_range", c.pose.level_max_range, openClosed(0, 1000, "m"));
+  v.number("pose.level_cell", c.pose.level_cell, openClosed(0, 100, "m"));
+  v.number("pose.smoothing_window", c.pose.smoothing_window, closed(0, 100, "s"));
+  v.number("pose.level_pitch_sigma", c.pose.level_pitch_sigma, openClosed(0, 1, "rad"));
+  v.number("pose.max_speed", c.pose.max_speed, openClosed(0, 1000, "m/s"));
+  // voxel map
+  v.number("voxel_map.voxel_size", c.voxel_map.voxel_size, closed(0.02, 5, "m"));
+  // ground segmentation
+  v.choice("ground.histogram", c.ground.histogram,
+           Choices<Histogram>{{"local", Histogram::Local}, {"global", Histogram::Global}});
+  v.choice("ground.solver", c.ground.solver, Choices<Solver>{{"icm", Solver::Icm}, {"mincut", Solver::MinCut}});
+  v.number("ground.bin_size", c.ground.bin_size, openClosed(0, 5, "m"));
+  v.number("ground.delta", c.ground.delta, openClosed(0, 10, "m"));
+  v.number("ground.range_margin", c.ground.range_margin, openClosed(0, 20, "m"));
+  v.number("ground.stack_height", c.ground.stack_height, offOr(10, "m"));
+  v.number("ground.stack_gap", c.ground.stack_gap, closed(0, 5, "m"));
+  v.number("ground.depth_below", c.ground.depth_below, offOr(100, "m"));
+  v.number("ground.tile_size", c.ground.tile_size, closed(1, 1000, "m"));
+  v.integer("ground.tile_radius", c.ground.tile_radius, closed(0, 10));
+  v.integer("ground.histogram_stride", c.ground.histogram_stride, closed(1, 8));
+  v.number("ground.alpha", c.ground.alpha, above(0));
+  v.number("ground.beta", c.ground.beta, above(0));
+  v.number("ground.gamma", c.ground.gamma, above(0));
+  v.integer("ground.icm_iterations", c.ground.icm_iterations, closed(1, 1000));
+  v.integer("ground.threads", c.ground.threads, closed(0, 1024, "(0: all cores)"));
+  v.number("ground.defer_share", c.ground.defer_share, closed(0, 1));
+  // boundary detection
+  v.number("boundary.a", c.boundary.a, closed(-1000, 1000));
+  v.number("boundary.b", c.boundary.b, closed(-1000, 1000));
+  v.number("boundary.kx", c.boundary.kx, above(0));
+  v.number("boundary.ky", c.boundary.ky, above(0));
+  v.number("boundary.threshold", c.boundary.threshold, above(0, "grey levels"));
+  v.integer("boundary.erode_width", c.boundary.erode_width, closed(1, 15, "px"));
+  v.integer("boundary.erode_height", c.boundary.erode_height, closed(1, 15, "px"));
+  v.integer("boundary.dilate_width", c.boundary.dilate_width, closed(1, 15, "px"));
+  v.integer("boundary.dilate_height", c.boundary.dilate_height, closed(1, 15, "px"));
+  v.flag("boundary.erode_all_directions", c.boundary.erode_all_directions);
+  v.flag("boundary.erode_sloping", c.boundary.erode_sloping);
+  v.integer("boundary.foliage_margin", c.boundary.foliage_margin, closed(0, 255, "grey levels"));
+  // boundary estimation
+  v.number("estimation.max_distance", c.estimation.max_distance, above(0, "m"));
+  v.number("estimation.max_height", c.estimation.max_height, above(0, "m"));
+  v.integer("estimation.top_margin", c.estimation.top_margin, closed(0, 100, "px"));
+  v.count("estimation.max_estimates", c.estimation.max_estimates, closed(1, 1000));
+  v.number("estimation.fusion_quantile", c.estimation.fusion_quantile, closed(0, 1));
+  v.flag("estimation.clear_line", c.estimation.clear_line);
+  v.flag("estimation.require_sky_above", c.estimation.require_sky_above);
+  v.integer("estimation.sky_blue_margin", c.estimation.sky_blue_margin, closed(0, 255, "grey levels"));
+  v.integer("estimation.sky_min_brightness", c.estimation.sky_min_brightness, closed(0, 255, "grey levels"));
+  v.flag("estimation.foliage_tops", c.estimation.foliage_tops);
+  v.integer("estimation.foliage_margin", c.estimation.foliage_margin, closed(0, 255, "grey levels"));
+  v.number("estimation.spread_distance", c.estimation.spread_distance, closed(0, 200, "m"));
+  v.number("estimation.parallax_slope", c.estimation.parallax_slope, closed(0, 10, "m per m"));
+  v.number("estimation.parallax_change", c.estimation.parallax_change, closed(0, 100, "m"));
+  v.number("estimation.parallax_min_gap", c.estimation.parallax_min_gap, closed(0, 1e4, "m"));
+  v.number("estimation.parallax_max_gap", c.estimation.parallax_max_gap, closed(0, 1e4, "m"));
+  v.number("estimation.parallax_min_t", c.estimation.parallax_min_t, closed(0, 1e6, "standard errors"));
+  v.flag("estimation.hold_young_crowns", c.estimation.hold_young_crowns);
+  // footprint completion
+  v.flag("footprint.enabled", c.footprint.enabled);
+  v.number("footprint.min_side", c.footprint.min_side, above(0, "m"));
+  v.number("footprint.wall_tolerance", c.footprint.wall_tolerance, closed(0, 10, "m"));
+  v.number("footprint.wall_band", c.footprint.wall_band, closed(0, 10, "m"));
+  v.number("footprint.min_wall_share", c.footprint.min_wall_share, closed(0, 1));
+  v.number("footprint.min_side_support", c.footprint.min_side_support, closed(0, 1));
+  v.number("footprint.max_inside_share", c.footprint.max_inside_share, closed(0, 1));
+  v.integer("footprint.min_raised", c.footprint.min_raised, atLeast(1));
+  v.number("footprint.min_raised_share", c.footprint.min_raised_share, closed(0, 1));
+  // crown completion
+  v.flag("crown.enabled", c.crown.enabled);
+  v.choice("crown.cue", c.crown.cue,
+           Choices<CrownConfig::Cue>{{"foliage", CrownConfig::Cue::Foliage}, {"sky", CrownConfig::Cue::Sky}});
+  v.integer("crown.foliage_margin", c.crown.foliage_margin, closed(0, 255, "grey levels"));
+  v.number("crown.max_trunk_gap", c.crown.max_trunk_gap, closed(0, 100, "m"));
+  v.number("crown.max_trunk_width", c.crown.max_trunk_width, openClosed(0, 10, "m"));
+  v.number("crown.max_grown_width", c.crown.max_grown_width, openClosed(0, 20, "m"));
+  v.number("crown.min_trunk_height", c.crown.min_trunk_height, closed(0, 20, "m"));
+  v.number("crown.min_radius", c.crown.min_radius, closed(0, 50, "m"));
+  v.number("crown.max_radius", c.crown.max_radius, openClosed(0, 50, "m"));
+  v.integer("crown.min_samples", c.crown.min_samples, atLeast(1));
+  v.number("crown.max_top_spread", c.crown.max_top_spread, atLeast(0));
+  v.integer("crown.min_height_px", c.crown.min_height_px, atLeast(1, "px"));
+  v.number("crown.min_baseline", c.crown.min_baseline, atLeast(0, "m"));
+  v.number("crown.max_offcentre", c.crown.max_offcentre, closed(0, 0.5));
+  // the crowns' visual hull
+  v.flag("hull.enabled", c.hull.enabled);
+  v.number("hull.cell", c.hull.cell, closed(0.05, 5, "m"));
+  v.number("hull.layer", c.hull.layer, closed(0.05, 5, "m"));
+  v.number("hull.max_height", c.hull.max_height, openClosed(0, 200, "m"));
+  v.number("hull.max_radius", c.hull.max_radius, openClosed(0, 50, "m"));
+  v.number("hull.max_distance", c.hull.max_distance, openClosed(0, 500, "m"));
+  v.integer("hull.min_views", c.hull.min_views, closed(1, 10000));
+  v.number("hull.min_parallax", c.hull.min_parallax, closed(0, 3.14, "rad"));
+  v.number("hull.min_foliage_share", c.hull.min_foliage_share, closed(0, 1));
+  v.number("hull.max_sky_share", c.hull.max_sky_share, closed(0, 1));
+  v.number("hull.horizon_margin", c.hull.horizon_margin, closed(-0.5, 0.5, "rad"));
+  v.number("hull.horizon_distance", c.hull.horizon_distance, closed(0, 1000, "m"));
+  // free space from the sky
+  v.flag("free_space.enabled", c.free_space.enabled);
+  v.number("free_space.min_distance", c.free_space.min_distance, closed(0, 100, "m"));
+  v.number("free_space.max_distance", c.free_space.max_distance, closed(0, 500, "m"));
+  v.number("free_space.margin", c.free_space.margin, closed(0, 10, "m"));
 }
+
+// The setters the YAML file and --set go through, by name.
+struct SetterTable {
+  std::map<std::string, io::Setter> setters;
+
+  void number(const char* name, double& f, const Range&) { setters[name] = io::numberSetter(f); }
+  void integer(const char* name, int& f, const Range&) { setters[name] = io::integerSetter(f); }
+  void count(const char* name, std::size_t& f, const Range&) {
+    setters[name] = [&f](const YAML::Node& n) {
+      const long long v = n.as<long long>();
+      if (v < 0) throw YAML::Exception(n.Mark(), "expected a whole number from 0");
+      f = static_cast<std::size_t>(v);
+    };
+  }
+  void flag(const char* name, bool& f) {
+    setters[name] = [&f](const YAML::Node& n) { f = n.as<bool>(); };
+  }
+  template <class E>
+  void choice(const char* name, E& f, Choices<E> choices) {
+    std::vector<std::pair<std::string, E>> list(choices.begin(), choices.end());
+    setters[name] = [&f, list](const YAML::Node& n) {
+      const std::string s = n.as<std::string>();
+      std::string names;
+      for (const auto& [text, value] : list) {
+        if (s == text) return void(f = value);
+        names += (names.empty() ? "" : " or ") + text;
+      }
+      throw YAML::Exception(n.Mark(), "expected " + names);
+    };
+  }
+};
+
+std::map<std::string, io::Setter> setters(PipelineConfig& c) {
+  SetterTable t;
+  forEachSetting(c, t);
+  return std::move(t.setters);
+}
+
+// Throws io::InputError for the first setting outside its range.
+struct RangeCheck {
+  void number(const char* name, double& f, const Range& r) { io::requireInRange(r.contains(f), name, f, r.text()); }
+  void integer(const char* name, int& f, const Range& r) { io::requireInRange(r.contains(f), name, f, r.text()); }
+  void count(const char* name, std::size_t& f, const Range& r) {
+    const double v = static_cast<double>(f);
+    io::requireInRange(r.contains(v), name, v, r.text());
+  }
+  void flag(const char*, bool&) {}
+  template <class E>
+  void choice(const char*, E&, Choices<E>) {}
+};
+
+// Each setting under its section in a JSON object.
+struct JsonWriter {
+  nlohmann::json j = nlohmann::json::object();
+
+  nlohmann::json& at(const std::string& name) {
+    const auto dot = name.find('.');
+    return dot == std::string::npos ? j[name] : j[name.substr(0, dot)][name.substr(dot + 1)];
+  }
+  void number(const char* name, double& f, const Range&) { at(name) = f; }
+  void integer(const char* name, int& f, const Range&) { at(name) = f; }
+  void count(const char* name, std::size_t& f, const Range&) { at(name) = f; }
+  void flag(const char* name, bool& f) { at(name) = f; }
+  template <class E>
+  void choice(const char* name, E& f, Choices<E> choices) {
+    for (const auto& [text, value] : choices) {
+      if (f == value) at(name) = text;
+    }
+  }
+};
+
+// Each setting's name, kind and what it allows.
+struct Describer {
+  std::vector<SettingInfo> out;
+
+  void number(const char* name, double&, const Range& r) { out.push_back({name, "number", r.text()}); }
+  void integer(const char* name, int&, const Range& r) { out.push_back({name, "integer", r.text()}); }
+  void count(const char* name, std::size_t&, const Range& r) { out.push_back({name, "integer", r.text()}); }
+  void flag(const char* name, bool&) { out.push_back({name, "flag", "true or false"}); }
+  template <class E>
+  void choice(const char* name, E&, Choices<E> choices) {
+    std::string names;
+    for (const auto& [text, value] : choices) names += (names.empty() ? "" : " or ") + std::string(text);
+    out.push_back({name, "choice", names});
+  }
+};
 
 }  // namespace
 
-void validate(const PipelineConfig& c) {
-  require(c.voxel_map.voxel_size >= 0.02 && c.voxel_map.voxel_size <= 5, "voxel_map.voxel_size", c.voxel_map.voxel_size,
-          "[0.02, 5] m");
-  require(c.segment_every >= 1, "segment_every", c.segment_every, ">= 1");
-  require(c.pose.heading_baseline > 0 && c.pose.heading_baseline <= 100, "pose.heading_baseline",
-          c.pose.heading_baseline, "(0, 100] m");
-  require(c.pose.max_speed > 0 && c.pose.max_speed <= 1000, "pose.max_speed", c.pose.max_speed, "(0, 1000] m/s");
-  require(c.pose.level_pitch_sigma > 0 && c.pose.level_pitch_sigma <= 1, "pose.level_pitch_sigma",
-          c.pose.level_pitch_sigma, "(0, 1] rad");
-  require(c.ground.bin_size > 0 && c.ground.bin_size <= 5, "ground.bin_size", c.ground.bin_size, "(0, 5] m");
-  require(c.ground.delta > 0 && c.ground.delta <= 10, "ground.delta", c.ground.delta, "(0, 10] m");
-  require(c.ground.range_margin > 0 && c.ground.range_margin <= 20, "ground.range_margin", c.ground.range_margin,
-          "(0, 20] m");
-  require(c.ground.stack_height >= 0 && c.ground.stack_height <= 10, "ground.stack_height", c.ground.stack_height,
-          "0 (off) or (0, 10] m");
-  require(c.ground.stack_gap >= 0 && c.ground.stack_gap <= 5, "ground.stack_gap", c.ground.stack_gap, "[0, 5] m");
-  require(c.ground.depth_below >= 0 && c.ground.depth_below <= 100, "ground.depth_below", c.ground.depth_below,
-          "0 (off) or (0, 100] m");
-  require(c.ground.tile_size >= 1 && c.ground.tile_size <= 1000, "ground.tile_size", c.ground.tile_size, "[1, 1000] m");
-  require(c.ground.tile_radius >= 0 && c.ground.tile_radius <= 10, "ground.tile_radius", c.ground.tile_radius,
-          "[0, 10]");
-  require(c.ground.histogram_stride >= 1 && c.ground.histogram_stride <= 8, "ground.histogram_stride",
-          c.ground.histogram_stride, "[1, 8]");
-  require(c.ground.alpha > 0, "ground.alpha", c.ground.alpha, "> 0");
-  require(c.ground.beta > 0, "ground.beta", c.ground.beta, "> 0");
-  require(c.ground.gamma > 0, "ground.gamma", c.ground.gamma, "> 0");
-  require(c.ground.defer_share >= 0 && c.ground.defer_share <= 1, "ground.defer_share", c.ground.defer_share, "[0, 1]");
-  require(c.ground.icm_iterations >= 1 && c.ground.icm_iterations <= 1000, "ground.icm_iterations",
-          c.ground.icm_iterations, "[1, 1000]");
+void validate(const PipelineConfig& config) {
+  PipelineConfig c = config;
+  forEachSetting(c, RangeCheck{});
+  // relations between settings
+  constexpr auto require = io::requireInRange;
+  require(c.pose.level_max_range > c.pose.level_min_range, "pose.level_max_range", c.pose.level_max_range,
+          "(pose.level_min_range, 1000] m");
   require(c.boundary.a != 0, "boundary.a", c.boundary.a, "non-zero");
   require(c.boundary.b != 0, "boundary.b", c.boundary.b, "non-zero");
-  require(c.boundary.kx > 0 && c.boundary.kx < c.boundary.ky, "boundary.kx", c.boundary.kx, "(0, ky)");
-  require(c.boundary.threshold > 0, "boundary.threshold", c.boundary.threshold, "> 0");
-  for (int v : {c.boundary.erode_width, c.boundary.erode_height, c.boundary.dilate_width, c.boundary.dilate_height}) {
-    require(v >= 1 && v <= 15, "boundary mask size", v, "[1, 15] px");
-  }
-  require(c.estimation.max_distance > 0, "estimation.max_distance", c.estimation.max_distance, "> 0 m");
-  require(c.estimation.max_height > 0, "estimation.max_height", c.estimation.max_height, "> 0 m");
-  require(c.estimation.parallax_slope >= 0 && c.estimation.parallax_slope <= 10, "estimation.parallax_slope",
-          c.estimation.parallax_slope, "[0, 10] m per m");
-  require(c.estimation.parallax_change >= 0 && c.estimation.parallax_change <= 100, "estimation.parallax_change",
-          c.estimation.parallax_change, "[0, 100] m");
-  require(c.estimation.parallax_min_gap >= 0 && c.estimation.parallax_min_gap <= c.estimation.parallax_max_gap,
-          "estimation.parallax_min_gap", c.estimation.parallax_min_gap, "[0, estimation.parallax_max_gap] m");
-  require(c.estimation.parallax_max_gap >= 0 && c.estimation.parallax_max_gap <= 1e4, "estimation.parallax_max_gap",
-          c.estimation.parallax_max_gap, "[0, 10000] m");
-  require(c.estimation.parallax_min_t >= 0 && c.estimation.parallax_min_t <= 1e6, "estimation.parallax_min_t",
-          c.estimation.parallax_min_t, "[0, 1e6] standard errors");
-  require(c.estimation.spread_distance >= 0 && c.estimation.spread_distance <= 200, "estimation.spread_distance",
-          c.estimation.spread_distance, "[0, 200] m");
-  require(c.footprint.min_side > 0, "footprint.min_side", c.footprint.min_side, "> 0 m");
-  require(c.footprint.wall_tolerance >= 0 && c.footprint.wall_tolerance <= 10, "footprint.wall_tolerance",
-          c.footprint.wall_tolerance, "[0, 10] m");
-  require(c.footprint.wall_band >= 0 && c.footprint.wall_band <= 10, "footprint.wall_band", c.footprint.wall_band,
-          "[0, 10] m");
-  for (const auto& [name, share] : {std::pair{"footprint.min_wall_share", c.footprint.min_wall_share},
-                                    {"footprint.min_side_support", c.footprint.min_side_support},
-                                    {"footprint.max_inside_share", c.footprint.max_inside_share},
-                                    {"footprint.min_raised_share", c.footprint.min_raised_share}}) {
-    require(share >= 0 && share <= 1, name, share, "[0, 1]");
-  }
-  require(c.footprint.min_raised >= 1, "footprint.min_raised", c.footprint.min_raised, ">= 1");
-  require(c.crown.max_trunk_width > 0 && c.crown.max_trunk_width <= 10, "crown.max_trunk_width",
-          c.crown.max_trunk_width, "(0, 10] m");
-  require(c.crown.max_grown_width >= c.crown.max_trunk_width && c.crown.max_grown_width <= 20, "crown.max_grown_width",
-          c.crown.max_grown_width, "[crown.max_trunk_width, 20] m");
-  require(c.crown.min_trunk_height >= 0 && c.crown.min_trunk_height <= 20, "crown.min_trunk_height",
-          c.crown.min_trunk_height, "[0, 20] m");
-  require(c.crown.min_radius >= 0 && c.crown.min_radius <= c.crown.max_radius, "crown.min_radius", c.crown.min_radius,
-          "[0, crown.max_radius] m");
-  require(c.crown.max_radius > 0 && c.crown.max_radius <= 50, "crown.max_radius", c.crown.max_radius, "(0, 50] m");
-  require(c.crown.min_samples >= 1, "crown.min_samples", c.crown.min_samples, ">= 1");
-  require(c.crown.foliage_margin >= 0 && c.crown.foliage_margin <= 255, "crown.foliage_margin", c.crown.foliage_margin,
-          "[0, 255] grey levels");
-  require(c.estimation.foliage_margin >= 0 && c.estimation.foliage_margin <= 255, "estimation.foliage_margin",
-          c.estimation.foliage_margin, "[0, 255] grey levels");
-  require(c.boundary.foliage_margin >= 0 && c.boundary.foliage_margin <= 255, "boundary.foliage_margin",
-          c.boundary.foliage_margin, "[0, 255] grey levels");
-  require(c.crown.max_trunk_gap >= 0 && c.crown.max_trunk_gap <= 100, "crown.max_trunk_gap", c.crown.max_trunk_gap,
-          "[0, 100] m");
-  require(c.crown.max_top_spread >= 0, "crown.max_top_spread", c.crown.max_top_spread, ">= 0");
-  require(c.crown.min_height_px >= 1, "crown.min_height_px", c.crown.min_height_px, ">= 1 px");
-  require(c.crown.min_baseline >= 0, "crown.min_baseline", c.crown.min_baseline, ">= 0 m");
-  require(c.free_space.min_distance >= 0 && c.free_space.min_distance <= 100, "free_space.min_distance",
-          c.free_space.min_distance, "[0, 100] m");
-  require(c.free_space.max_distance >= c.free_space.min_distance && c.free_space.max_distance <= 500,
-          "free_space.max_distance", c.free_space.max_distance, "[free_space.min_distance, 500] m");
-  require(c.free_space.margin >= 0 && c.free_space.margin <= 10, "free_space.margin", c.free_space.margin, "[0, 10] m");
-  require(c.crown.max_offcentre >= 0 && c.crown.max_offcentre <= 0.5, "crown.max_offcentre", c.crown.max_offcentre,
-          "[0, 0.5]");
-  require(c.hull.cell >= 0.05 && c.hull.cell <= 5, "hull.cell", c.hull.cell, "[0.05, 5] m");
-  require(c.hull.layer >= 0.05 && c.hull.layer <= 5, "hull.layer", c.hull.layer, "[0.05, 5] m");
-  require(c.hull.max_height > 0 && c.hull.max_height <= 200 && c.hull.max_height / c.hull.layer <= 1000,
-          "hull.max_height", c.hull.max_height, "(0, 200] m and at most 1000 layers of hull.layer");
-  require(c.hull.max_radius > 0 && c.hull.max_radius <= 50 && c.hull.max_radius / c.hull.cell <= 200, "hull.max_radius",
-          c.hull.max_radius, "(0, 50] m and at most 200 cells of hull.cell");
-  require(c.hull.max_distance > 0 && c.hull.max_distance <= 500, "hull.max_distance", c.hull.max_distance,
-          "(0, 500] m");
-  require(c.hull.min_views >= 1 && c.hull.min_views <= 10000, "hull.min_views", c.hull.min_views, "[1, 10000]");
-  require(c.hull.min_parallax >= 0 && c.hull.min_parallax <= 3.14, "hull.min_parallax", c.hull.min_parallax,
-          "[0, 3.14] rad");
-  require(c.hull.min_foliage_share >= 0 && c.hull.min_foliage_share <= 1, "hull.min_foliage_share",
-          c.hull.min_foliage_share, "[0, 1]");
-  require(c.hull.max_sky_share >= 0 && c.hull.max_sky_share <= 1, "hull.max_sky_share", c.hull.max_sky_share, "[0, 1]");
-  require(c.hull.horizon_margin >= -0.5 && c.hull.horizon_margin <= 0.5, "hull.horizon_margin", c.hull.horizon_margin,
-          "[-0.5, 0.5] rad");
-  require(c.hull.horizon_distance >= 0 && c.hull.horizon_distance <= 1000, "hull.horizon_distance",
-          c.hull.horizon_distance, "[0, 1000] m");
-  require(c.estimation.max_estimates >= 1 && c.estimation.max_estimates <= 1000, "estimation.max_estimates",
-          static_cast<double>(c.estimation.max_estimates), "[1, 1000]");
-  require(c.estimation.fusion_quantile >= 0 && c.estimation.fusion_quantile <= 1, "estimation.fusion_quantile",
-          c.estimation.fusion_quantile, "[0, 1]");
+  require(c.boundary.kx < c.boundary.ky, "boundary.kx", c.boundary.kx, "(0, boundary.ky)");
+  require(c.estimation.parallax_min_gap <= c.estimation.parallax_max_gap, "estimation.parallax_min_gap",
+          c.estimation.parallax_min_gap, "[0, estimation.parallax_max_gap] m");
+  require(c.crown.max_grown_width >= c.crown.max_trunk_width, "crown.max_grown_width", c.crown.max_grown_width,
+          "[crown.max_trunk_width, 20] m");
+  require(c.crown.min_radius <= c.crown.max_radius, "crown.min_radius", c.crown.min_radius, "[0, crown.max_radius] m");
+  require(c.hull.max_height / c.hull.layer <= 1000, "hull.max_height", c.hull.max_height,
+          "(0, 200] m and at most 1000 layers of hull.layer");
+  require(c.hull.max_radius / c.hull.cell <= 200, "hull.max_radius", c.hull.max_radius,
+          "(0, 50] m and at most 200 cells of hull.cell");
+  require(c.free_space.max_distance >= c.free_space.min_distance, "free_space.max_distance", c.free_space.max_distance,
+          "[free_space.min_distance, 500] m");
+}
+
+std::vector<SettingInfo> pipelineSettings() {
+  PipelineConfig c;
+  Describer d;
+  forEachSetting(c, d);
+  return std::move(d.out);
 }
 
 void loadPipelineConfig(const std::filesystem::path& path, PipelineConfig& c) {
-  io::applySettings(path, fields(c),
+  io::applySettings(path, setters(c),
                     "pose, voxel_map, ground, boundary, estimation, footprint, crown, hull, free_space");
 }
 
 void applyPipelineSetting(const std::string& key_value, PipelineConfig& c, const std::string& option) {
-  io::applySetting(key_value, fields(c), option);
+  io::applySetting(key_value, setters(c), option);
 }
 
-std::string pipelineConfigToJson(const PipelineConfig& c) {
-  nlohmann::json j;
-  j["segment_every"] = c.segment_every;
-  j["pose"] = {{"heading_baseline", c.pose.heading_baseline},
-               {"level_min_range", c.pose.level_min_range},
-               {"level_max_range", c.pose.level_max_range},
-               {"level_pitch_sigma", c.pose.level_pitch_sigma},
-               {"max_speed", c.pose.max_speed}};
-  j["voxel_map"] = {{"voxel_size", c.voxel_map.voxel_size}};
-  j["ground"] = {{"histogram", c.ground.histogram == GroundSegmentationConfig::Histogram::Local ? "local" : "global"},
-                 {"solver", c.ground.solver == GroundSegmentationConfig::Solver::Icm ? "icm" : "mincut"},
-                 {"bin_size", c.ground.bin_size},
-                 {"delta", c.ground.delta},
-                 {"range_margin", c.ground.range_margin},
-                 {"stack_height", c.ground.stack_height},
-                 {"stack_gap", c.ground.stack_gap},
-                 {"depth_below", c.ground.depth_below},
-                 {"tile_size", c.ground.tile_size},
-                 {"tile_radius", c.ground.tile_radius},
-                 {"histogram_stride", c.ground.histogram_stride},
-                 {"alpha", c.ground.alpha},
-                 {"beta", c.ground.beta},
-                 {"gamma", c.ground.gamma},
-                 {"icm_iterations", c.ground.icm_iterations},
-                 {"threads", c.ground.threads},
-                 {"defer_share", c.ground.defer_share}};
-  j["boundary"] = {{"a", c.boundary.a},
-                   {"b", c.boundary.b},
-                   {"kx", c.boundary.kx},
-                   {"ky", c.boundary.ky},
-                   {"threshold", c.boundary.threshold},
-                   {"erode_width", c.boundary.erode_width},
-                   {"erode_height", c.boundary.erode_height},
-                   {"dilate_width", c.boundary.dilate_width},
-                   {"dilate_height", c.boundary.dilate_height},
-                   {"erode_all_directions", c.boundary.erode_all_directions},
-                   {"erode_sloping", c.boundary.erode_sloping},
-                   {"foliage_margin", c.boundary.foliage_margin}};
-  j["estimation"] = {{"max_distance", c.estimation.max_distance},
-                     {"max_height", c.estimation.max_height},
-                     {"top_margin", c.estimation.top_margin},
-                     {"max_estimates", c.estimation.max_estimates},
-                     {"fusion_quantile", c.estimation.fusion_quantile},
-                     {"clear_line", c.estimation.clear_line},
-                     {"require_sky_above", c.estimation.require_sky_above},
-                     {"sky_blue_margin", c.estimation.sky_blue_margin},
-                     {"sky_min_brightness", c.estimation.sky_min_brightness},
-                     {"foliage_tops", c.estimation.foliage_tops},
-                     {"foliage_margin", c.estimation.foliage_margin},
-                     {"spread_distance", c.estimation.spread_distance},
-                     {"parallax_slope", c.estimation.parallax_slope},
-                     {"parallax_change", c.estimation.parallax_change},
-                     {"parallax_min_gap", c.estimation.parallax_min_gap},
-                     {"parallax_max_gap", c.estimation.parallax_max_gap},
-                     {"parallax_min_t", c.estimation.parallax_min_t},
-                     {"hold_young_crowns", c.estimation.hold_young_crowns}};
-  j["footprint"] = {{"enabled", c.footprint.enabled},
-                    {"min_side", c.footprint.min_side},
-                    {"wall_tolerance", c.footprint.wall_tolerance},
-                    {"wall_band", c.footprint.wall_band},
-                    {"min_wall_share", c.footprint.min_wall_share},
-                    {"min_side_support", c.footprint.min_side_support},
-                    {"max_inside_share", c.footprint.max_inside_share},
-                    {"min_raised", c.footprint.min_raised},
-                    {"min_raised_share", c.footprint.min_raised_share}};
-  j["crown"] = {{"enabled", c.crown.enabled},
-                {"cue", c.crown.cue == CrownConfig::Cue::Foliage ? "foliage" : "sky"},
-                {"foliage_margin", c.crown.foliage_margin},
-                {"max_trunk_gap", c.crown.max_trunk_gap},
-                {"max_trunk_width", c.crown.max_trunk_width},
-                {"max_grown_width", c.crown.max_grown_width},
-                {"min_trunk_height", c.crown.min_trunk_height},
-                {"min_radius", c.crown.min_radius},
-                {"max_radius", c.crown.max_radius},
-                {"min_samples", c.crown.min_samples},
-                {"max_top_spread", c.crown.max_top_spread},
-                {"min_height_px", c.crown.min_height_px},
-                {"min_baseline", c.crown.min_baseline},
-                {"max_offcentre", c.crown.max_offcentre}};
-  j["hull"] = {{"enabled", c.hull.enabled},
-               {"cell", c.hull.cell},
-               {"layer", c.hull.layer},
-               {"max_height", c.hull.max_height},
-               {"max_radius", c.hull.max_radius},
-               {"max_distance", c.hull.max_distance},
-               {"min_views", c.hull.min_views},
-               {"min_parallax", c.hull.min_parallax},
-               {"min_foliage_share", c.hull.min_foliage_share},
-               {"max_sky_share", c.hull.max_sky_share},
-               {"horizon_margin", c.hull.horizon_margin},
-               {"horizon_distance", c.hull.horizon_distance}};
-  j["free_space"] = {{"enabled", c.free_space.enabled},
-                     {"min_distance", c.free_space.min_distance},
-                     {"max_distance", c.free_space.max_distance},
-                     {"margin", c.free_space.margin}};
-  return j.dump();
+std::string pipelineConfigToJson(const PipelineConfig& config) {
+  PipelineConfig c = config;
+  JsonWriter w;
+  forEachSetting(c, w);
+  return w.j.dump();
 }
 
 }  // namespace terrain::app

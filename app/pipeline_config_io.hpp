@@ -1,11 +1,13 @@
 #pragma once
 // The pipeline configuration from YAML (sections pose, voxel_map, ground, boundary, estimation,
-// plus segment_every) and as JSON for reports.
+// footprint, crown, hull, free_space, plus segment_every), from --set KEY=VALUE, checked, and as
+// JSON for reports and the run state: all from one list of the settings (pipeline_config_io.cpp).
 
 #include "core/pipeline.hpp"
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace terrain::app {
 
@@ -23,5 +25,13 @@ void validate(const PipelineConfig& config);
 
 // The same fields and names as the YAML file (JSON is YAML: the result loads as a config file).
 std::string pipelineConfigToJson(const PipelineConfig& config);
+
+// One setting: its name (section.field), its kind (number, integer, flag, choice) and the values
+// it allows, as error messages state them.
+struct SettingInfo {
+  std::string name, kind, allowed;
+};
+// Every setting, in the order of the one list that reading, checking and writing them derive from.
+std::vector<SettingInfo> pipelineSettings();
 
 }  // namespace terrain::app
