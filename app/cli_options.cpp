@@ -86,8 +86,8 @@ void addPipelineOptions(CLI::App& cmd, PipelineConfig& c, bool ground_only) {
            if (!parseSolver(s, c.ground.solver))
              throw io::InputError("--solver must be icm or mincut, not '" + s + "'");
          },
-         "GMRF solver: icm or mincut (exact)")
-      ->default_str("icm");
+         "GMRF solver: mincut (the exact minimum) or icm (iterated conditional modes, the paper's)")
+      ->default_str("mincut");
   cmd.add_option("--delta", c.ground.delta, "half-width of the ground band around the histogram peak [m]")
       ->capture_default_str();
   cmd.add_option("--alpha", c.ground.alpha, "GMRF single-site weight")->capture_default_str();

@@ -30,7 +30,14 @@ struct GroundSegmentationConfig {
   enum class Histogram { Global, Local };
   enum class Solver { Icm, MinCut };
   Histogram histogram = Histogram::Local;
-  Solver solver = Solver::Icm;
+  // The GMRF's solver: min-cut, the exact minimum of the energy, or ICM, its local minimum from the
+  // rough classes. ICM leaves whole patches of ground outside the band as non-ground where every
+  // voxel agrees with its neighbours (rough terrain, ramps): on 60-frame runs of seeds 11 and 12 of
+  // every terrain type (not looked at before) ICM F1 was rough 94.33 / 97.15 %, mixed 97.80 /
+  // 97.92, slope 98.50 / 98.44, forest 99.28 / 99.09 and min-cut 98.96 / 99.26, 99.44 / 99.36,
+  // 98.86 / 98.38, 99.60 / 99.65 (flat and urban the same); on the real KITTI scans 0.978 / 0.969
+  // by ICM and 0.978 / 0.968 by min-cut; a scan segmented in 8.0 ms against ICM's 6.9.
+  Solver solver = Solver::MinCut;
   double bin_size = 0.1;      // [m] histogram bin width
   double delta = 0.3;         // [m] half-width of the ground band around h1 (rough class G1)
   double range_margin = 0.5;  // [m] half-width of R(ground) around h1

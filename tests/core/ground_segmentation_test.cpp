@@ -39,7 +39,8 @@ TEST(GroundSegmentationTest, GmrfCleansANoisyLabelling) {
   VoxelMap map = groundWithBox();
   GroundSegmentationConfig cfg;
   cfg.histogram = GroundSegmentationConfig::Histogram::Global;
-  cfg.stack_height = 0;  // the paper's terms: the walls' feet are ground here
+  cfg.stack_height = 0;                                // the paper's terms: the walls' feet are ground here
+  cfg.solver = GroundSegmentationConfig::Solver::Icm;  // the paper's solver, whose cleaning this tests
   const SegmentationResult clean = segmentGround(map, cfg);
   // truth: ground voxels are the ones at z index 0; the lowest wall voxel (0.25 m above the
   // ground, inside the +-delta band) is ambiguous and not scored
@@ -159,7 +160,8 @@ TEST(GroundSegmentationTest, GroundUnderAnOverhangStaysGround) {
 // A wall sampled ring by ring, as a single far scan sees it: its column holds the foot, the voxel
 // right above it and then every second voxel up to 1.9 m. With ground.stack_gap (0.2 m: one empty
 // voxel) the foot is non-ground; with an unbroken stack required (0) it is ground, as the paper's
-// terms make it. The wall is two voxels thick so that the GMRF's smoothing keeps its feet.
+// terms make it. The wall is two voxels thick so that ICM keeps its feet (min-cut's exact minimum
+// joins the feet of so thin a wall to the ground around them).
 TEST(GroundSegmentationTest, AWallSampledRingByRingIsAStack) {
   VoxelMap map(VoxelMapConfig{0.2});
   std::vector<Point3> pts;
@@ -173,6 +175,7 @@ TEST(GroundSegmentationTest, AWallSampledRingByRingIsAStack) {
   map.insert(pts, 0);
   GroundSegmentationConfig cfg;
   ASSERT_NEAR(cfg.stack_gap, 0.2, 1e-12);  // the default
+  cfg.solver = GroundSegmentationConfig::Solver::Icm;
   const SegmentationResult with = segmentGround(map, cfg);
   cfg.stack_gap = 0;
   const SegmentationResult without = segmentGround(map, cfg);
