@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <optional>
 #include <sstream>
 
 namespace terrain::rig {
@@ -406,9 +407,23 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
     gyro_.push_back({r[0], Vector3(r[1], r[2], r[3])});
   }
   if (has_truth_) {
-    const auto pose_row = [](const std::vector<double>& r) -> std::string {
+    // the vehicle drives forward (the pose estimation takes its heading from the GPS track): over
+    // every stretch of at least kStretch (0.5 m), its forward axis at the stretch's end points less
+    // than 120 degrees away from the stretch
+    constexpr double kStretch = 0.5;
+    std::optional<Eigen::Vector2d> stretch_start;
+    const auto pose_row = [&stretch_start](const std::vector<double>& r) -> std::string {
       const double norm = Eigen::Vector4d(r[4], r[5], r[6], r[7]).norm();
       if (std::abs(norm - 1.0) > 1e-3) return "the quaternion qw qx qy qz has norm " + std::to_string(norm) + ", not 1";
+      const Eigen::Vector2d at(r[1], r[2]);
+      if (!stretch_start) stretch_start = at;
+      const Eigen::Vector2d moved = at - *stretch_start;
+      if (moved.norm() < kStretch) return {};
+      stretch_start = at;
+      const Vector3 ahead = Eigen::Quaterniond(r[4], r[5], r[6], r[7]).normalized() * Vector3::UnitX();
+      if (ahead.head<2>().dot(moved) < -0.5 * ahead.head<2>().norm() * moved.norm())
+        return "the vehicle drives backwards (its x axis points against its last 0.5 m of motion); the pose "
+               "estimation takes the heading from the GPS track, driving forward";
       return {};
     };
     for (const auto& r : readStream(dir_ / "poses_gt.csv", 8, pose_row)) {

@@ -124,6 +124,22 @@ TEST(DatasetTest, MalformedCsvIsNamedWithItsLine) {
     EXPECT_NE(std::string(e.what()).find("poses_gt.csv:3: the quaternion qw qx qy qz has norm 0.5"), std::string::npos)
         << e.what();
   }
+  // driving forward along x, then turning about to face west while still moving east: refused at
+  // the row that ends the first 0.5 m stretch driven backwards
+  const std::string header = "time_s,x,y,z,qw,qx,qy,qz\n";
+  io::writeFileAtomic(dir / "ds" / "poses_gt.csv",
+                      header + "0,0,0,0,1,0,0,0\n0.1,0.3,0,0,1,0,0,0\n0.2,0.6,0,0,1,0,0,0\n", true);
+  EXPECT_NO_THROW(DatasetSource(dir / "ds"));
+  io::writeFileAtomic(dir / "ds" / "poses_gt.csv",
+                      header + "0,0,0,0,1,0,0,0\n0.1,0.6,0,0,1,0,0,0\n0.2,0.9,0,0,0,0,0,1\n0.3,1.2,0,0,0,0,0,1\n",
+                      true);
+  try {
+    DatasetSource s(dir / "ds");
+    ADD_FAILURE() << "a vehicle driving backwards was accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("poses_gt.csv:5: the vehicle drives backwards"), std::string::npos)
+        << e.what();
+  }
 }
 
 // a laser table of 16 lasers, enough for a dataset to load
