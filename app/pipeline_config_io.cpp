@@ -152,6 +152,7 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.integer("crown.min_height_px", c.crown.min_height_px, atLeast(1, "px"));
   v.number("crown.min_baseline", c.crown.min_baseline, atLeast(0, "m"));
   v.number("crown.max_offcentre", c.crown.max_offcentre, closed(0, 0.5));
+  v.number("crown.max_width_to_depth", c.crown.max_width_to_depth, closed(0, 10));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);
   v.number("hull.cell", c.hull.cell, closed(0.05, 5, "m"));

@@ -179,81 +179,103 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     record.key = t.key;
     record.centre = t.centre.cast<float>();
     const auto count = [&record](CrownOutcome o) { countUp(record.outcomes[static_cast<std::size_t>(o)]); };
-    // the crown's rows on the trunk's vertical: [top, bottom]
-    int top = v, bottom = v - 1;
-    if (foliage_cue) {
-      // up the bare trunk (neither foliage nor sky) to the crown's lowest pixel, then up the crown
-      const int gap = static_cast<int>(std::ceil(cfg.max_trunk_gap * k.fy / views[i].depth));
-      int row = v;
-      while (row >= 0 && v - row <= gap && inside(column(i, row)) && !crown(column(i, row), row) &&
-             !sky(column(i, row), row))
-        --row;
-      if (row < 0 || v - row > gap || !inside(column(i, row)) || !crown(column(i, row), row)) {
-        count(CrownOutcome::NoCrown);  // no crown above the bare trunk
-        continue;
+    // the crown's rows on the trunk's vertical, [top, bottom], and its widest run. With the foliage
+    // cue a crown above the trunk that a tree nearer the camera owns hides the trunk: the walk goes
+    // on up the trunk's vertical above it (within max_trunk_gap of the trunk's sensed top)
+    const int gap = static_cast<int>(std::ceil(cfg.max_trunk_gap * k.fy / views[i].depth));
+    std::optional<CrownOutcome> failed;
+    int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, half = 0, own = 0;
+    double run_centre = 0;
+    for (int start = v;;) {
+      top = start, bottom = start - 1;
+      if (foliage_cue) {
+        // up the bare trunk (neither foliage nor sky) to the crown's lowest pixel, then up the crown
+        int row = start;
+        while (row >= 0 && v - row <= gap && inside(column(i, row)) && !crown(column(i, row), row) &&
+               !sky(column(i, row), row))
+          --row;
+        if (row < 0 || v - row > gap || !inside(column(i, row)) || !crown(column(i, row), row)) {
+          if (!failed) failed = CrownOutcome::NoCrown;  // no crown above the bare trunk
+          break;
+        }
+        bottom = row;
+        top = row;
       }
-      bottom = row;
-      top = row;
+      while (top - 1 >= 0 && inside(column(i, top - 1)) && crown(column(i, top - 1), top - 1)) --top;
+      // cut off by the image top, or too little crown
+      if (top == 0 || bottom - top + 1 < cfg.min_height_px) {
+        failed = CrownOutcome::TooShort;
+        break;
+      }
+      // the crown's runs around the vertical, row by row down from the top, while the cue bounds
+      // them on both sides and neither end jumps outwards (something behind joining the crown): the
+      // widest, and the crown's half width as the largest distance from the vertical to the nearer
+      // end of a run (a crown beside it, joined on one side, does not widen it)
+      widest = 0, widest_left = 0, widest_row = top, half = 0;
+      int prev_left = column(i, top), prev_right = prev_left;
+      for (int row = top; row <= bottom; ++row) {
+        const int u = column(i, row);
+        if (!inside(u)) break;
+        int left = u, right = u;
+        while (left - 1 >= 0 && crown(left - 1, row)) --left;
+        while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
+        if (left == 0 || right == rgb.cols - 1) break;
+        const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
+        if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
+        if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
+        half = std::max(half, std::min(u - left, right - u));
+        prev_left = left, prev_right = right;
+      }
+      if (widest == 0) {
+        failed = CrownOutcome::Unbounded;
+        break;
+      }
+      // a crown stands over its trunk: a widest run centred away from the trunk's vertical is
+      // another tree's crown, nearer or farther (the clear-line test knows only sensed objects, and
+      // crowns are above the lidar's reach)
+      run_centre = widest_left + 0.5 * (widest - 1);
+      own = column(i, widest_row);
+      if (std::abs(run_centre - own) > cfg.max_offcentre * widest + 1.0) {
+        failed = CrownOutcome::OffCentre;
+        break;
+      }
+      // of the trunks standing under the run (their tops below the crown's), the one nearest its
+      // centre owns it
+      std::optional<std::size_t> owner;
+      for (std::size_t j = 0; j < trunks.size() && !owner; ++j) {
+        if (j == i || views[j].u < 0) continue;
+        const int other = column(j, widest_row);
+        if (other >= widest_left && other < widest_left + widest && views[j].v > top &&
+            std::abs(other - run_centre) < std::abs(own - run_centre))
+          owner = j;
+      }
+      if (!owner) {
+        failed.reset();
+        break;
+      }
+      failed = CrownOutcome::NearerTrunk;
+      if (!foliage_cue || views[*owner].depth >= views[i].depth) break;
+      start = top - 1;  // the nearer tree's crown hides this trunk: on up above it
     }
-    while (top - 1 >= 0 && inside(column(i, top - 1)) && crown(column(i, top - 1), top - 1)) --top;
-    // cut off by the image top, or too little crown
-    if (top == 0 || bottom - top + 1 < cfg.min_height_px) {
-      count(CrownOutcome::TooShort);
+    if (failed) {
+      count(*failed);
       continue;
     }
-    // the crown's runs around the vertical, row by row down from the top, while the cue bounds them
-    // on both sides and neither end jumps outwards (something behind joining the crown): the widest,
-    // and the crown's half width as the largest distance from the vertical to the nearer end of a
-    // run (a crown beside it, joined on one side, does not widen it)
-    int widest = 0, widest_left = 0, widest_row = top, half = 0;
-    int prev_left = column(i, top), prev_right = prev_left;
-    for (int row = top; row <= bottom; ++row) {
-      const int u = column(i, row);
-      if (!inside(u)) break;
-      int left = u, right = u;
-      while (left - 1 >= 0 && crown(left - 1, row)) --left;
-      while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
-      if (left == 0 || right == rgb.cols - 1) break;
-      const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
-      if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
-      if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
-      half = std::max(half, std::min(u - left, right - u));
-      prev_left = left, prev_right = right;
-    }
-    if (widest == 0) {
-      count(CrownOutcome::Unbounded);
-      continue;
-    }
-    // a crown stands over its trunk: a widest run centred away from the trunk's vertical is another
-    // tree's crown, nearer or farther (the clear-line test knows only sensed objects, and crowns are
-    // above the lidar's reach)
-    const double run_centre = widest_left + 0.5 * (widest - 1);
-    const int own = column(i, widest_row);
-    if (std::abs(run_centre - own) > cfg.max_offcentre * widest + 1.0) {
-      count(CrownOutcome::OffCentre);
-      continue;
-    }
-    // of the trunks standing under the run (their tops below the crown's), the one nearest its
-    // centre owns it
-    bool nearer = false;
-    for (std::size_t j = 0; j < trunks.size() && !nearer; ++j) {
-      if (j == i || views[j].u < 0) continue;
-      const int other = column(j, widest_row);
-      nearer = other >= widest_left && other < widest_left + widest && views[j].v > top &&
-               std::abs(other - run_centre) < std::abs(own - run_centre);
-    }
-    if (nearer) {
-      count(CrownOutcome::NearerTrunk);
-      continue;
-    }
-    const double radius = (half + 0.5) * views[i].depth / k.fx;
-    const Vector3 dir =
-        world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, top + 0.5), top + 0.5));
+    const auto along = [&](double row) {  // the ray through the vertical at `row` (world frame)
+      return Vector3(world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, row), row)));
+    };
+    const Vector3 dir = along(top + 0.5);
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
+    double radius = (half + 0.5) * views[i].depth / k.fx;
     if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) {
       count(CrownOutcome::Implausible);
       continue;
     }
+    // a crown is at most max_width_to_depth times as wide as it is deep (its top above its lowest
+    // pixel on the vertical): wider, the runs took in crowns behind it on both sides
+    const double lowest = heightAbove(centre, along(bottom + 1.0), t.centre.x(), t.centre.y());
+    if (std::isfinite(lowest) && cfg.max_width_to_depth > 0)
+      radius = std::min(radius, 0.5 * cfg.max_width_to_depth * std::max(0.0, height - lowest));
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
     const double reach = std::max(sky_cfg.max_distance, (t.centre - centre.head<2>()).norm() + cfg.max_radius);
     if (sky_cfg.clear_line &&

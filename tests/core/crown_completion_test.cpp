@@ -38,13 +38,17 @@ struct Tree {
   // z0_voxels: everything (ground, trunk, crown, camera) that many voxels higher (z0 [m]); world
   // heights may be negative. grown: what the trunk's object took in after it was measured, as the
   // robot neared: the crown's underside within 2 m of it, sensed at 5 m (Grown::IntoCrown), or a
-  // facade running 5 m east from it, sensed at 3 m (Grown::IntoFacade)
+  // facade running 5 m east from it, sensed at 3 m (Grown::IntoFacade). near_tree: a small tree
+  // 10 m north of the camera, its trunk (one cell centred at (-0.1, 10.1)) sensed up to 2.2 m, its
+  // crown a sphere of radius 0.4 m centred 2.8 m up, which hides the tree's trunk in the image
+  // between the lidar's 3 m and the crown's 5 m
   enum class Behind { Nothing, Wall, Trunk };
   enum class Grown { No, IntoCrown, IntoFacade };
   double z0 = 0;
+  bool near = false;
   explicit Tree(Behind behind = Behind::Nothing, bool second_trunk = false, int smear = 1, int z0_voxels = 0,
-                Grown grown = Grown::No)
-      : second(second_trunk), z0(z0_voxels * 0.2) {
+                Grown grown = Grown::No, bool near_tree = false)
+      : second(second_trunk), z0(z0_voxels * 0.2), near(near_tree) {
     pose.translation().z() += z0;
     std::vector<Voxel> voxels;
     std::vector<MeshVertex> vertices;
@@ -63,6 +67,9 @@ struct Tree {
         vertices.push_back(m);
       }
     }
+    if (near)
+      test::addColumn(voxels, vertices, CellIndex(-1, 50), 11 + z0_voxels, static_cast<float>(2.2 + z0),
+                      VoxelLabel::NonGround);
     for (int x = -25; x <= 25; ++x) {
       for (int y = 75; y <= 125; ++y) {
         const bool trunk = (x == 0 && y >= 100 && y < 100 + smear) || (second_trunk && x == 5 && y == 110) ||
@@ -112,6 +119,17 @@ struct Tree {
         rgb,
         cv::Point(static_cast<int>(std::lround(centre->x())), static_cast<int>(std::lround(centre->y())) - crown_shift),
         static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
+    if (near) {
+      const auto near_base = project(k, camera_from_world * Point3(-0.1, 10.1, z0));
+      const auto near_centre = project(k, camera_from_world * Point3(-0.1, 10.1, 2.8 + z0));
+      cv::rectangle(rgb, cv::Point(static_cast<int>(near_base->x()) - 2, static_cast<int>(near_centre->y())),
+                    cv::Point(static_cast<int>(near_base->x()) + 2, static_cast<int>(near_base->y())),
+                    cv::Scalar(90, 60, 30), cv::FILLED);
+      cv::circle(
+          rgb,
+          cv::Point(static_cast<int>(std::lround(near_centre->x())), static_cast<int>(std::lround(near_centre->y()))),
+          static_cast<int>(std::lround(k.fx * std::asin(0.4 / 10.1))), cv::Scalar(40, 110, 30), cv::FILLED);
+    }
     return rgb;
   }
 };
@@ -470,6 +488,54 @@ TEST(CrownCompletionTest, OfTwoTrunksUnderOneCrownOnlyTheOneNearestItsCentreTake
   EXPECT_NEAR(tree.at(10, 110).height(), 9.0, 0.25);
   // no cap of its own: 2.2 m north of it (4.3 m from the first trunk) the ground stays ground
   EXPECT_FALSE(tree.at(5, 121).raised());
+}
+
+// A nearer tree's crown hides the trunk between the lidar's reach and the crown: the walk up the
+// trunk meets foliage that the nearer trunk owns (its column is nearer the run's centre), passes it
+// and goes on up the trunk above it to the tree's own crown.
+TEST(CrownCompletionTest, TheWalkUpATrunkPassesANearerTreesCrownThatHidesIt) {
+  Tree tree(Tree::Behind::Nothing, false, 1, 0, Tree::Grown::No, true);
+  const cv::Mat rgb = tree.image();
+  // the nearer crown lies on the trunk's vertical between the trunk's sensed top and its crown
+  const Pose camera_from_world = tree.pose.inverse();
+  const Pixel trunk_top = *project(tree.k, camera_from_world * Point3(0.1, 20.1, 3.0));
+  const Pixel crown_bottom = *project(tree.k, camera_from_world * Point3(0.1, 20.1, 5.0));
+  const int u = static_cast<int>(trunk_top.x());
+  int foliage_rows = 0;
+  for (int row = static_cast<int>(crown_bottom.y()) + 2; row < static_cast<int>(trunk_top.y()); ++row)
+    foliage_rows += looksLikeFoliage(rgb.at<cv::Vec3b>(row, u), CrownConfig{}.foliage_margin);
+  ASSERT_GT(foliage_rows, 10);
+  CrownConfig cfg;
+  cfg.min_baseline = 0;
+  CrownSampler sampler;
+  for (int frame = 0; frame < 3; ++frame) sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, {});
+  EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  tree.expectCap();
+}
+
+// A crown is at most crown.max_width_to_depth times as wide as it is deep: the tree's crown is 6 m
+// deep (5 to 11 m) and 6 m wide, within the default 2; at 0.5 its samples' radius is cut to
+// 0.5 * 0.5 * 6 = 1.5 m, so the cap reaches 1 m from the trunk but not 2 m.
+TEST(CrownCompletionTest, ACrownIsNoWiderThanMaxWidthToDepthTimesItsDepth) {
+  for (const double ratio : {2.0, 0.5}) {
+    Tree tree;
+    CrownConfig cfg;
+    cfg.min_baseline = 0;
+    cfg.max_width_to_depth = ratio;
+    CrownSampler sampler;
+    for (int frame = 0; frame < 3; ++frame) {
+      EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, {}), 1);
+    }
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    if (ratio == 2.0) {
+      tree.expectCap();
+    } else {
+      EXPECT_NEAR(tree.at(1, 100).height(), 11.0, 0.15);
+      // 1 m from the trunk on a 1.5 m cap: 11 - 1.5 + sqrt(2.25 - 1)
+      EXPECT_NEAR(tree.at(5, 100).height(), 9.5 + std::sqrt(1.25), 0.25);
+      EXPECT_FALSE(tree.at(10, 100).raised());
+    }
+  }
 }
 
 }  // namespace
