@@ -298,20 +298,6 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
   return out;
 }
 
-struct GroundSegmenter::Work {
-  Workspace ws;
-};
-
-GroundSegmenter::GroundSegmenter(const GroundSegmentationConfig& config)
-    : config_(config), work_(std::make_unique<Work>()) {}
-
-GroundSegmenter::~GroundSegmenter() = default;
-
-const SegmentationResult& GroundSegmenter::segment(const VoxelMap& map) {
-  segmentWhole(map, config_, work_->ws, result_);
-  return result_;
-}
-
 // ---------------------------------------------------------------------------------------------
 // incremental
 
@@ -380,30 +366,6 @@ IncrementalGroundSegmentation::~IncrementalGroundSegmentation() = default;
 
 const SegmentationResult& IncrementalGroundSegmentation::result() const { return state_->result; }
 const IncrementalGroundSegmentation::Stats& IncrementalGroundSegmentation::lastStats() const { return state_->stats; }
-
-void IncrementalGroundSegmentation::touch(const std::vector<Point3>& points, double voxel_size) {
-  State& st = *state_;
-  st.setCell(voxel_size);
-  // each chunk of points lists its tiles (successive points mostly fall in one), then the lists
-  // go into the set
-  const std::size_t n = points.size();
-  std::vector<std::vector<std::uint64_t>> keys(kChunks);
-  tbb::task_arena arena = arenaFor(st.cfg.threads);
-  arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
-      std::vector<std::uint64_t>& out = keys[c];
-      for (std::size_t i = n * c / kChunks; i < n * (c + 1) / kChunks; ++i) {
-        const Point3& p = points[i];
-        if (!p.allFinite()) continue;
-        const double fx = std::floor(p.x() / st.cell), fy = std::floor(p.y() / st.cell);
-        if (std::abs(fx) > 1e9 || std::abs(fy) > 1e9) continue;
-        const std::uint64_t key = tileKey(floorDiv(static_cast<int>(fx), st.k), floorDiv(static_cast<int>(fy), st.k));
-        if (out.empty() || key != out.back()) out.push_back(key);
-      }
-    });
-  });
-  for (const auto& list : keys) st.touched.insert(list.begin(), list.end());
-}
 
 void IncrementalGroundSegmentation::update(VoxelMap& map) {
   State& st = *state_;

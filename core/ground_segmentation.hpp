@@ -169,10 +169,10 @@ struct SegmentationResult {
 
 // Keeps the segmentation of a growing map current frame by frame, at a cost that follows the
 // sensor's footprint rather than the map's size (local histogram only; with the global one every
-// update segments the whole map). Tiles that points fell into since the last update are
-// re-segmented: their ground planes, and those of the tiles whose window reaches them, are refitted
-// exactly as segmentGroundLabels fits them, and the GMRF is solved over the voxels of the refitted
-// tiles with the labels of their neighbours outside held fixed.
+// update segments the whole map). Tiles whose voxels added since they were last segmented make up
+// defer_share of their voxels are re-segmented: their ground planes, and those of the tiles whose window reaches them,
+// are refitted exactly as segmentGroundLabels fits them, and the GMRF is solved over the voxels of the refitted tiles
+// with the labels of their neighbours outside held fixed.
 class IncrementalGroundSegmentation {
  public:
   explicit IncrementalGroundSegmentation(const GroundSegmentationConfig& config);
@@ -180,17 +180,16 @@ class IncrementalGroundSegmentation {
   IncrementalGroundSegmentation(const IncrementalGroundSegmentation&) = delete;
   IncrementalGroundSegmentation& operator=(const IncrementalGroundSegmentation&) = delete;
 
-  // Marks the tiles these world points [m] fall in (cells of voxel_size [m]) for the next update.
-  void touch(const std::vector<Point3>& points, double voxel_size);
-  // Re-segments the touched tiles, taking in the voxels added to the map since the last update;
-  // writes the labels of the re-segmented voxels into the map.
+  // Takes in the voxels added to the map since the last update and re-segments the tiles they made
+  // due (defer_share); writes the labels of the re-segmented voxels into the map.
   void update(VoxelMap& map);
 
   // Per voxel id: rough, refined, ground_height. Energies and iterations are those of the last
   // update's subproblem.
   const SegmentationResult& result() const;
   struct Stats {
-    std::size_t touched_tiles = 0, refitted_tiles = 0, voxels = 0;  // voxels re-segmented
+    // tiles due, tiles refitted (those due and those whose window reaches them), voxels re-segmented
+    std::size_t touched_tiles = 0, refitted_tiles = 0, voxels = 0;
   };
   const Stats& lastStats() const;
 
@@ -201,26 +200,6 @@ class IncrementalGroundSegmentation {
 
 // Segments every voxel of the map; the map is not changed.
 SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmentationConfig& config);
-
-// Segments whole maps as segmentGroundLabels does, keeping its working memory from one call to
-// the next: a robot that re-segments its map as it grows allocates nothing new once the map stops
-// growing.
-class GroundSegmenter {
- public:
-  explicit GroundSegmenter(const GroundSegmentationConfig& config);
-  ~GroundSegmenter();
-  GroundSegmenter(const GroundSegmenter&) = delete;
-  GroundSegmenter& operator=(const GroundSegmenter&) = delete;
-
-  // Segments every voxel of the map (not changed); the result stays valid until the next call.
-  const SegmentationResult& segment(const VoxelMap& map);
-
- private:
-  struct Work;
-  GroundSegmentationConfig config_;
-  std::unique_ptr<Work> work_;
-  SegmentationResult result_;
-};
 
 // Segments every voxel of the map and writes the refined labels into the voxels.
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& config);
