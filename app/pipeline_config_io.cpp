@@ -153,6 +153,8 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("crown.min_baseline", c.crown.min_baseline, atLeast(0, "m"));
   v.number("crown.max_offcentre", c.crown.max_offcentre, closed(0, 0.5));
   v.number("crown.max_width_to_depth", c.crown.max_width_to_depth, closed(0, 10));
+  v.flag("crown.cut_off_tops", c.crown.cut_off_tops);
+  v.number("crown.cut_off_quantile", c.crown.cut_off_quantile, closed(0, 1));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);
   v.number("hull.cell", c.hull.cell, closed(0.05, 5, "m"));

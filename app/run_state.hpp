@@ -13,7 +13,7 @@
 
 namespace terrain::app {
 
-inline constexpr const char* kRunStateFormat = "terrain-run-state/5";
+inline constexpr const char* kRunStateFormat = "terrain-run-state/6";
 
 // Writes OUT/state/ (state.json, pipeline_config.json, pipeline.bin, truth.bin, cameras/*.png).
 // The scene is recorded relative to OUT when it lies inside it.

@@ -78,6 +78,8 @@ const char* outcomeName(CrownOutcome outcome) {
       return "not_clear";
     case CrownOutcome::NotAboveGround:
       return "not_above_ground";
+    case CrownOutcome::CutOff:
+      return "cut_off";
   }
   return "unknown";
 }
@@ -98,6 +100,8 @@ const char* verdictName(CrownVerdict verdict) {
       return "too_narrow";
     case CrownVerdict::Raised:
       return "raised";
+    case CrownVerdict::RaisedToBound:
+      return "raised_to_bound";
   }
   return "unknown";
 }
@@ -184,6 +188,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     // on up the trunk's vertical above it (within max_trunk_gap of the trunk's sensed top)
     const int gap = static_cast<int>(std::ceil(cfg.max_trunk_gap * k.fy / views[i].depth));
     std::optional<CrownOutcome> failed;
+    bool cut = false;
     int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, half = 0, own = 0;
     double run_centre = 0;
     for (int start = v;;) {
@@ -202,29 +207,37 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         top = row;
       }
       while (top - 1 >= 0 && inside(column(i, top - 1)) && crown(column(i, top - 1), top - 1)) --top;
-      // cut off by the image top, or too little crown
-      if (top == 0 || bottom - top + 1 < cfg.min_height_px) {
+      // cut off by the image top (with cut_off_tops, a bound on the top from below), or too little
+      // crown
+      cut = top == 0;
+      if ((cut && !cfg.cut_off_tops) || bottom - top + 1 < cfg.min_height_px) {
         failed = CrownOutcome::TooShort;
         break;
       }
       // the crown's runs around the vertical, row by row down from the top, while the cue bounds
       // them on both sides and neither end jumps outwards (something behind joining the crown): the
       // widest, and the crown's half width as the largest distance from the vertical to the nearer
-      // end of a run (a crown beside it, joined on one side, does not widen it)
+      // end of a run (a crown beside it, joined on one side, does not widen it). A crown cut off by
+      // the image top, near the camera, may fill the image's width at the top: its runs from the
+      // first one bounded on both sides
       widest = 0, widest_left = 0, widest_row = top, half = 0;
-      int prev_left = column(i, top), prev_right = prev_left;
+      int prev_left = column(i, top), prev_right = prev_left, bounded = 0;
       for (int row = top; row <= bottom; ++row) {
         const int u = column(i, row);
         if (!inside(u)) break;
         int left = u, right = u;
         while (left - 1 >= 0 && crown(left - 1, row)) --left;
         while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
-        if (left == 0 || right == rgb.cols - 1) break;
+        if (left == 0 || right == rgb.cols - 1) {
+          if (cut && bounded == 0) continue;
+          break;
+        }
         const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
-        if (row > top + 1 && (prev_left - left > jump || right - prev_right > jump)) break;
+        if (bounded >= 2 && (prev_left - left > jump || right - prev_right > jump)) break;
         if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
         half = std::max(half, std::min(u - left, right - u));
         prev_left = left, prev_right = right;
+        ++bounded;
       }
       if (widest == 0) {
         failed = CrownOutcome::Unbounded;
@@ -288,9 +301,9 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       count(CrownOutcome::NotAboveGround);
       continue;
     }
-    count(CrownOutcome::Measured);
+    count(cut ? CrownOutcome::CutOff : CrownOutcome::Measured);
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>(),
-                               t.centre.cast<float>()});
+                               t.centre.cast<float>(), cut});
     ++measured;
   }
   return measured;
@@ -374,72 +387,89 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   }
   for (std::size_t ti = 0; ti < trunks.size(); ++ti) {
     const Trunk& t = trunks[ti];
-    const std::vector<Sample>& samples = merged[ti];
+    // the samples, and apart from them the bound samples of crowns cut off by the image top
+    std::vector<const Sample*> samples, bounds;
+    for (const Sample& s : merged[ti]) (s.bound ? bounds : samples).push_back(&s);
     const auto judge = [&](CrownVerdict v) {
       for (std::uint32_t key : merged_keys[ti]) {
         if (const auto record = records_.find(key); record != records_.end()) record->second.verdict = v;
       }
       if (const auto record = records_.find(t.key); record != records_.end()) record->second.verdict = v;
     };
-    if (static_cast<int>(samples.size()) < std::max(1, cfg.min_samples)) {
-      judge(CrownVerdict::TooFewSamples);
-      continue;
-    }
-    // seen from far enough apart
-    double baseline = 0;
-    for (const Sample& a : samples)
-      baseline = std::max(baseline, static_cast<double>((a.camera - samples.front().camera).norm()));
-    if (baseline < cfg.min_baseline) {
-      judge(CrownVerdict::NoBaseline);
-      continue;
-    }
-    const double ground = groundAround(t, mesh, map);  // also for the tops' agreement below
-    if (!standsAboveGround(t, ground, cfg.min_trunk_height)) {
-      judge(CrownVerdict::Sunk);
-      continue;
-    }
-    // A sample bounds the crown's top from above: foliage above the crown in its column (a taller
-    // crown behind or before it in some frames) only lifts it. Of the groups of samples whose tops
-    // lie within max_top_spread (a share of the lowest one's height above the ground around the
-    // trunk, or above the trunk's sensed top where no ground is near) above the group's lowest,
-    // the lowest group with min_samples samples whose cameras spread min_baseline gives the crown:
-    // its median top, and the lower quartile of its radii (a run widened by a crown beside it errs
-    // only upwards).
-    std::vector<const Sample*> by_top;
-    for (const Sample& s : samples) by_top.push_back(&s);
-    std::stable_sort(by_top.begin(), by_top.end(), [](const Sample* a, const Sample* b) { return a->top < b->top; });
-    // do the cameras of samples [first, end) of by_top lie min_baseline apart? (their bounding box
-    // decides most groups; the pairs only the rest)
-    const auto spread = [&](std::size_t first, std::size_t end) {
-      Eigen::AlignedBox2f box;
-      for (std::size_t i = first; i < end; ++i) box.extend(by_top[i]->camera);
-      const Eigen::Vector2f size = box.sizes();
-      if (size.maxCoeff() >= cfg.min_baseline) return true;
-      if (size.norm() < cfg.min_baseline) return false;
-      for (std::size_t i = first; i < end; ++i) {
-        for (std::size_t j = i + 1; j < end; ++j) {
-          if ((by_top[i]->camera - by_top[j]->camera).norm() >= cfg.min_baseline) return true;
-        }
-      }
-      return false;
+    const int min_samples = std::max(1, cfg.min_samples);
+    // the farthest a camera stood from the first one's
+    const auto baseline = [](const std::vector<const Sample*>& list) {
+      double b = 0;
+      for (const Sample* a : list) b = std::max(b, static_cast<double>((a->camera - list.front()->camera).norm()));
+      return b;
     };
-    const double foot = std::isfinite(ground) ? ground : t.top;
-    std::vector<float> tops, radii;
-    for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
-      const double lowest = by_top[first]->top, reach = lowest + cfg.max_top_spread * std::max(0.0, lowest - foot);
-      std::size_t end = first;
-      while (end < by_top.size() && by_top[end]->top <= reach) ++end;
-      if (static_cast<int>(end - first) < std::max(1, cfg.min_samples) || !spread(first, end)) continue;
-      for (std::size_t i = first; i < end; ++i) tops.push_back(by_top[i]->top), radii.push_back(by_top[i]->radius);
-    }
-    if (tops.empty()) {
-      judge(CrownVerdict::Disagree);
-      continue;
-    }
-    std::sort(radii.begin(), radii.end());
-    const double top = tops[tops.size() / 2], r = radii[radii.size() / 4];
-    if (r < cfg.min_radius) {
-      judge(CrownVerdict::TooNarrow);
+    double ground = std::numeric_limits<double>::quiet_NaN();  // groundAround, once needed
+    double top = 0, r = 0;
+    const CrownVerdict verdict = [&] {
+      if (static_cast<int>(samples.size()) < min_samples) return CrownVerdict::TooFewSamples;
+      // seen from far enough apart
+      if (baseline(samples) < cfg.min_baseline) return CrownVerdict::NoBaseline;
+      ground = groundAround(t, mesh, map);  // also for the tops' agreement below
+      if (!standsAboveGround(t, ground, cfg.min_trunk_height)) return CrownVerdict::Sunk;
+      // A sample bounds the crown's top from above: foliage above the crown in its column (a taller
+      // crown behind or before it in some frames) only lifts it. Of the groups of samples whose tops
+      // lie within max_top_spread (a share of the lowest one's height above the ground around the
+      // trunk, or above the trunk's sensed top where no ground is near) above the group's lowest,
+      // the lowest group with min_samples samples whose cameras spread min_baseline gives the crown:
+      // its median top, and the lower quartile of its radii (a run widened by a crown beside it
+      // errs only upwards).
+      std::vector<const Sample*> by_top = samples;
+      std::stable_sort(by_top.begin(), by_top.end(), [](const Sample* a, const Sample* b) { return a->top < b->top; });
+      // do the cameras of samples [first, end) of by_top lie min_baseline apart? (their bounding box
+      // decides most groups; the pairs only the rest)
+      const auto spread = [&](std::size_t first, std::size_t end) {
+        Eigen::AlignedBox2f box;
+        for (std::size_t i = first; i < end; ++i) box.extend(by_top[i]->camera);
+        const Eigen::Vector2f size = box.sizes();
+        if (size.maxCoeff() >= cfg.min_baseline) return true;
+        if (size.norm() < cfg.min_baseline) return false;
+        for (std::size_t i = first; i < end; ++i) {
+          for (std::size_t j = i + 1; j < end; ++j) {
+            if ((by_top[i]->camera - by_top[j]->camera).norm() >= cfg.min_baseline) return true;
+          }
+        }
+        return false;
+      };
+      const double foot = std::isfinite(ground) ? ground : t.top;
+      std::vector<float> tops, radii;
+      for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
+        const double lowest = by_top[first]->top, reach = lowest + cfg.max_top_spread * std::max(0.0, lowest - foot);
+        std::size_t end = first;
+        while (end < by_top.size() && by_top[end]->top <= reach) ++end;
+        if (static_cast<int>(end - first) < min_samples || !spread(first, end)) continue;
+        for (std::size_t i = first; i < end; ++i) tops.push_back(by_top[i]->top), radii.push_back(by_top[i]->radius);
+      }
+      if (tops.empty()) return CrownVerdict::Disagree;
+      std::sort(radii.begin(), radii.end());
+      top = tops[tops.size() / 2], r = radii[radii.size() / 4];
+      return r < cfg.min_radius ? CrownVerdict::TooNarrow : CrownVerdict::Raised;
+    }();
+    // no crown from the samples: the bound samples (each a lower bound on the top) give the top's
+    // cut_off_quantile and the lower quartile of their radii
+    const auto fromBounds = [&] {
+      if (static_cast<int>(bounds.size()) < min_samples || baseline(bounds) < cfg.min_baseline) return false;
+      if (std::isnan(ground)) ground = groundAround(t, mesh, map);
+      if (!standsAboveGround(t, ground, cfg.min_trunk_height)) return false;
+      std::vector<float> tops, radii;
+      for (const Sample* b : bounds) tops.push_back(b->top), radii.push_back(b->radius);
+      std::sort(tops.begin(), tops.end());
+      std::sort(radii.begin(), radii.end());
+      const double q = std::clamp(cfg.cut_off_quantile, 0.0, 1.0);
+      top = tops[std::min(tops.size() - 1, static_cast<std::size_t>(q * static_cast<double>(tops.size())))];
+      r = radii[radii.size() / 4];
+      return r >= cfg.min_radius;
+    };
+    CrownVerdict outcome = verdict;
+    if (verdict != CrownVerdict::Raised && verdict != CrownVerdict::Sunk && verdict != CrownVerdict::TooNarrow &&
+        fromBounds())
+      outcome = CrownVerdict::RaisedToBound;
+    if (outcome != CrownVerdict::Raised && outcome != CrownVerdict::RaisedToBound) {
+      judge(outcome);
       continue;
     }
     // a grown trunk is the tree only while all of it lies within the crown's radius of where the
@@ -452,7 +482,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
         continue;
       }
     }
-    judge(CrownVerdict::Raised);
+    judge(outcome);
     // the ground vertices (and the trunk's own) within the radius: a spherical cap topped at `top`
     const int reach = static_cast<int>(std::ceil(r / cell));
     const CellIndex c0(static_cast<int>(std::floor(t.centre.x() / cell)),

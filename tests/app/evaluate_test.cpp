@@ -99,7 +99,7 @@ TEST_F(EvaluateTest, DamagedStateGetsAClearError) {
   EXPECT_NE(msg2.find("not a terrain run state"), std::string::npos) << msg2;
   auto [rc3, msg3] = damaged("state.json", "{\"format\": \"something-else/9\"}");
   EXPECT_NE(rc3, 0);
-  EXPECT_NE(msg3.find("format is not terrain-run-state/5"), std::string::npos) << msg3;
+  EXPECT_NE(msg3.find("format is not terrain-run-state/6"), std::string::npos) << msg3;
   auto [rc4, msg4] = damaged("pipeline_config.json", "ground: {delta: -1}");
   EXPECT_NE(rc4, 0);
   EXPECT_NE(msg4.find("ground.delta"), std::string::npos) << msg4;

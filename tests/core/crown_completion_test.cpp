@@ -280,7 +280,7 @@ TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOf
   // without the test each of the two trunks in the column takes the crown for its own
   EXPECT_EQ(sampler.measure(trunk.mesh, trunk.map, trunk.image(), trunk.k, trunk.pose, cfg, no_clear_line), 2);
   sampler = CrownSampler();
-  // the crown runs off the image top: its top is unknown
+  // the crown drawn wholly above the image: the trunk runs up to the image top, no crown above it
   EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(400), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}),
             0);
   EXPECT_EQ(sampler.trunks(), 0u);
@@ -288,6 +288,59 @@ TEST(CrownCompletionTest, NoSampleWhenAnotherObjectMayOwnTheTopOrTheCrownIsCutOf
   CrownSampler once;
   EXPECT_EQ(once.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
   EXPECT_EQ(once.apply(tree.mesh, tree.map, cfg), 0);
+}
+
+// A crown drawn 120 px higher runs off the image top (its top at 18.7 m, row -27): a frame gives a
+// bound sample, the ray through the top row over the trunk, 1.6 + 239.5 / fy * 20.1 = 17.0 m. With
+// no sample of the whole crown the bound samples raise the ground under it to that height; the
+// crown's radius still comes from its runs (3 m).
+TEST(CrownCompletionTest, ACrownCutOffByTheImageTopIsRaisedToItsBound) {
+  CrownConfig cfg;
+  cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+  {
+    Tree tree;
+    CrownSampler sampler;
+    for (int frame = 0; frame < 3; ++frame)
+      EXPECT_EQ(
+          sampler.measure(tree.mesh, tree.map, tree.image(120), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+    ASSERT_EQ(sampler.records().size(), 1u);
+    EXPECT_EQ(sampler.records()[0].outcomes[static_cast<std::size_t>(CrownOutcome::CutOff)], 3);
+    EXPECT_STREQ(outcomeName(CrownOutcome::CutOff), "cut_off");
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::RaisedToBound);
+    EXPECT_STREQ(verdictName(CrownVerdict::RaisedToBound), "raised_to_bound");
+    const double bound = 1.6 + (tree.k.cy - 0.5) / tree.k.fy * 20.1;
+    EXPECT_NEAR(tree.at(1, 100).height(), bound, 0.15);
+    EXPECT_LT(tree.at(1, 100).height(), 11.0 + 120 * 20.0 / tree.k.fy);  // below the crown's top
+    // 2 m from the trunk: on the cap of radius 3 m
+    EXPECT_NEAR(tree.at(10, 100).height(), bound - 3.0 + std::sqrt(5.0), 0.2);
+    EXPECT_FALSE(tree.at(17, 100).raised());
+  }
+  {
+    // without cut_off_tops such frames give nothing
+    Tree tree;
+    CrownSampler sampler;
+    CrownConfig off = cfg;
+    off.cut_off_tops = false;
+    for (int frame = 0; frame < 3; ++frame)
+      EXPECT_EQ(
+          sampler.measure(tree.mesh, tree.map, tree.image(120), tree.k, tree.pose, off, BoundaryEstimationConfig{}), 0);
+    EXPECT_EQ(sampler.records()[0].outcomes[static_cast<std::size_t>(CrownOutcome::TooShort)], 3);
+    EXPECT_EQ(sampler.apply(tree.mesh, tree.map, off), 0);
+    EXPECT_FALSE(tree.at(1, 100).raised());
+  }
+  {
+    // whole crowns in three frames and cut-off ones in three: the whole crowns give the top
+    Tree tree;
+    CrownSampler sampler;
+    for (const int shift : {0, 120, 0, 120, 0, 120})
+      EXPECT_EQ(
+          sampler.measure(tree.mesh, tree.map, tree.image(shift), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}),
+          1);
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    tree.expectCap();
+  }
 }
 
 // A sampler that measured the tree's crown in three frames of its image.
