@@ -17,41 +17,12 @@ namespace terrain::app {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// The values a number may take: finite, from lo to hi, either end open or closed; with `off`, 0
-// too (the setting's "off").
-struct Range {
-  double lo = -kInf, hi = kInf;
-  bool lo_open = false, hi_open = false, off = false;
-  const char* unit = "";
-
-  bool contains(double v) const {
-    if (!std::isfinite(v)) return false;
-    if (off && v == 0) return true;
-    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-  }
-  // as error messages state it: "[0, 100] m", "> 0 m", "0 (off) or (0, 10] m"
-  std::string text() const {
-    const auto g = [](double x) {
-      std::ostringstream o;
-      o << x;
-      return o.str();
-    };
-    std::string t;
-    if (hi == kInf) {
-      t = (lo_open ? "> " : ">= ") + g(lo);
-    } else {
-      t = std::string(off ? "0 (off) or " : "") + (lo_open ? "(" : "[") + g(lo) + ", " + g(hi) + (hi_open ? ")" : "]");
-    }
-    return *unit ? t + " " + unit : t;
-  }
-};
-Range closed(double lo, double hi, const char* unit = "") { return {lo, hi, false, false, false, unit}; }
-Range openClosed(double lo, double hi, const char* unit = "") { return {lo, hi, true, false, false, unit}; }
-Range above(double lo, const char* unit = "") { return {lo, kInf, true, false, false, unit}; }
-Range atLeast(double lo, const char* unit = "") { return {lo, kInf, false, false, false, unit}; }
-Range offOr(double hi, const char* unit = "") { return {0, hi, true, false, true, unit}; }
+using io::above;
+using io::atLeast;
+using io::closed;
+using io::offOr;
+using io::openClosed;
+using io::Range;
 
 template <class E>
 using Choices = std::initializer_list<std::pair<const char*, E>>;
@@ -229,10 +200,7 @@ struct RangeCheck {
 struct JsonWriter {
   nlohmann::json j = nlohmann::json::object();
 
-  nlohmann::json& at(const std::string& name) {
-    const auto dot = name.find('.');
-    return dot == std::string::npos ? j[name] : j[name.substr(0, dot)][name.substr(dot + 1)];
-  }
+  nlohmann::json& at(const std::string& name) { return io::settingEntry(j, name); }
   void number(const char* name, double& f, const Range&) { at(name) = f; }
   void integer(const char* name, int& f, const Range&) { at(name) = f; }
   void count(const char* name, std::size_t& f, const Range&) { at(name) = f; }

@@ -69,6 +69,115 @@ void validateCamera(const CameraMount& m, const std::string& field) {
 
 }  // namespace
 
+namespace {
+
+using io::Range;
+
+// Every setting of the simulation but the camera list, once: its name (section.field, as in the
+// YAML file and the JSON), its member and the values it may take. Reading YAML, validate() and the
+// JSON are all derived from this list. Relations between settings and the cameras themselves are
+// checked in validate().
+//  - number / integer: a value in its range;
+//  - unset_number / unset_integer: NaN or 0 for "each camera's own", else in its range;
+//  - vector: [x, y, z], each in its range;
+//  - text, flag, seed: any.
+template <class Visit>
+void forEachSimSetting(SimConfig& c, Visit&& v) {
+  v.seed("seed", c.seed);
+  v.integer("threads", c.threads, io::closed(0, 256));
+  v.number("robot.speed", c.robot.speed, io::openClosed(0, 30, "m/s"));
+  v.number("robot.mast_height", c.robot.mast_height, io::closed(0.5, 5, "m"));
+  v.number("robot.wheelbase", c.robot.wheelbase, io::openClosed(0, 5, "m"));
+  v.number("robot.track", c.robot.track, io::openClosed(0, 5, "m"));
+  v.text("lidar.calibration", c.lidar.calibration);
+  v.number("lidar.rotation_hz", c.lidar.rotation_hz, io::closed(5, 15, "Hz"));
+  v.number("lidar.firing_rate_hz", c.lidar.firing_rate_hz, io::closed(1000, 100000, "Hz"));
+  v.number("lidar.max_range", c.lidar.max_range, io::openClosed(0, 200, "m"));
+  v.number("lidar.min_range", c.lidar.min_range, io::closedOpen(0, 200, "m"));
+  v.number("lidar.range_noise", c.lidar.range_noise, io::closed(0, 1, "m"));
+  v.number("lidar.laser_bias", c.lidar.laser_bias, io::closed(0, 1, "m"));
+  v.number("lidar.dropout", c.lidar.dropout, io::closedOpen(0, 1));
+  v.number("lidar.height_cap", c.lidar.height_cap, io::openClosed(-5, 200, "m"));
+  v.flag("camera.enabled", c.camera.enabled);
+  v.text("camera.rig", c.camera.rig);
+  v.unset_integer("camera.width", c.camera.width, io::closed(16, 4096, "px"));
+  v.unset_integer("camera.height", c.camera.height, io::closed(16, 4096, "px"));
+  v.unset_number("camera.fovy_deg", c.camera.fovy_deg, io::openOpen(0, 180, "deg"));
+  v.unset_number("camera.pitch_deg", c.camera.pitch_deg, io::closed(-45, 45, "deg"));
+  v.number("gps.rate_hz", c.gps.rate_hz, io::openClosed(0, 100, "Hz"));
+  v.number("gps.horizontal_sigma", c.gps.horizontal_sigma, io::closed(0, 100, "m"));
+  v.number("gps.vertical_sigma", c.gps.vertical_sigma, io::closed(0, 100, "m"));
+  v.vector("gps.antenna", c.gps.antenna, io::closed(-5, 5, "m per axis"));
+  v.number("gyro.rate_hz", c.gyro.rate_hz, io::closed(100, 2000, "Hz"));
+  v.number("gyro.noise_sigma", c.gyro.noise_sigma, io::closed(0, 1, "rad/s"));
+  v.number("gyro.bias_sigma", c.gyro.bias_sigma, io::closed(0, 1, "rad/s"));
+}
+
+// a YAML [x, y, z] into a vector
+io::Setter vectorSetter(Eigen::Vector3d& f) {
+  return [&f](const YAML::Node& n) {
+    if (!n.IsSequence() || n.size() != 3) throw YAML::Exception(n.Mark(), "expected [x, y, z]");
+    f = {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
+  };
+}
+
+// The YAML setter of each setting.
+struct SimSetters {
+  std::map<std::string, io::Setter> setters;
+  void number(const char* name, double& f, const Range&) { setters[name] = io::numberSetter(f); }
+  void unset_number(const char* name, double& f, const Range&) { setters[name] = io::numberSetter(f); }
+  void integer(const char* name, int& f, const Range&) { setters[name] = io::integerSetter(f); }
+  void unset_integer(const char* name, int& f, const Range&) { setters[name] = io::integerSetter(f); }
+  void vector(const char* name, Eigen::Vector3d& f, const Range&) { setters[name] = vectorSetter(f); }
+  void text(const char* name, std::string& f) {
+    setters[name] = [&f](const YAML::Node& n) { f = n.as<std::string>(); };
+  }
+  void flag(const char* name, bool& f) {
+    setters[name] = [&f](const YAML::Node& n) { f = n.as<bool>(); };
+  }
+  void seed(const char* name, std::uint64_t& f) {
+    setters[name] = [&f](const YAML::Node& n) { f = n.as<std::uint64_t>(); };
+  }
+};
+
+// Throws io::InputError for the first setting outside its range.
+struct SimRangeCheck {
+  void number(const char* name, double& f, const Range& r) { io::requireInRange(r.contains(f), name, f, r.text()); }
+  void unset_number(const char* name, double& f, const Range& r) {
+    io::requireInRange(std::isnan(f) || r.contains(f), name, f, r.text());
+  }
+  void integer(const char* name, int& f, const Range& r) { io::requireInRange(r.contains(f), name, f, r.text()); }
+  void unset_integer(const char* name, int& f, const Range& r) {
+    io::requireInRange(f == 0 || r.contains(f), name, f, r.text());
+  }
+  void vector(const char* name, Eigen::Vector3d& f, const Range& r) {
+    for (int i = 0; i < 3; ++i) io::requireInRange(r.contains(f[i]), name, f[i], r.text());
+  }
+  void text(const char*, std::string&) {}
+  void flag(const char*, bool&) {}
+  void seed(const char*, std::uint64_t&) {}
+};
+
+// Each setting under its section in a JSON object; unset ones as null.
+struct SimJson {
+  nlohmann::json j = nlohmann::json::object();
+  nlohmann::json& at(const std::string& name) { return io::settingEntry(j, name); }
+  void number(const char* name, double& f, const Range&) { at(name) = f; }
+  void unset_number(const char* name, double& f, const Range&) {
+    at(name) = std::isnan(f) ? nlohmann::json() : nlohmann::json(f);
+  }
+  void integer(const char* name, int& f, const Range&) { at(name) = f; }
+  void unset_integer(const char* name, int& f, const Range&) {
+    at(name) = f == 0 ? nlohmann::json() : nlohmann::json(f);
+  }
+  void vector(const char* name, Eigen::Vector3d& f, const Range&) { at(name) = {f.x(), f.y(), f.z()}; }
+  void text(const char* name, std::string& f) { at(name) = f; }
+  void flag(const char* name, bool& f) { at(name) = f; }
+  void seed(const char* name, std::uint64_t& f) { at(name) = f; }
+};
+
+}  // namespace
+
 std::vector<CameraMount> cameraRig(const std::string& name) {
   CameraMount front;  // the defaults: today's forward camera
   if (name == "forward") return {front};
@@ -106,30 +215,11 @@ std::vector<CameraMount> rigCameras(const CameraConfig& c) {
 }
 
 void validate(const SimConfig& c) {
-  require(c.robot.speed > 0 && c.robot.speed <= 30, "robot.speed", c.robot.speed, "(0, 30] m/s");
-  require(c.robot.mast_height >= 0.5 && c.robot.mast_height <= 5, "robot.mast_height", c.robot.mast_height,
-          "[0.5, 5] m");
-  require(c.robot.wheelbase > 0 && c.robot.wheelbase <= 5, "robot.wheelbase", c.robot.wheelbase, "(0, 5] m");
-  require(c.robot.track > 0 && c.robot.track <= 5, "robot.track", c.robot.track, "(0, 5] m");
-  require(c.lidar.rotation_hz >= 5 && c.lidar.rotation_hz <= 15, "lidar.rotation_hz", c.lidar.rotation_hz,
-          "[5, 15] Hz");
-  require(c.lidar.firing_rate_hz >= 1000 && c.lidar.firing_rate_hz <= 100000, "lidar.firing_rate_hz",
-          c.lidar.firing_rate_hz, "[1000, 100000] Hz");
-  require(c.lidar.max_range > 0 && c.lidar.max_range <= 200, "lidar.max_range", c.lidar.max_range, "(0, 200] m");
-  require(c.lidar.min_range >= 0 && c.lidar.min_range < c.lidar.max_range, "lidar.min_range", c.lidar.min_range,
-          "[0, max_range) m");
-  require(c.lidar.range_noise >= 0 && c.lidar.range_noise <= 1, "lidar.range_noise", c.lidar.range_noise, "[0, 1] m");
-  require(c.lidar.laser_bias >= 0 && c.lidar.laser_bias <= 1, "lidar.laser_bias", c.lidar.laser_bias, "[0, 1] m");
-  require(c.lidar.dropout >= 0 && c.lidar.dropout < 1, "lidar.dropout", c.lidar.dropout, "[0, 1)");
-  require(c.lidar.height_cap > -5 && c.lidar.height_cap <= 200, "lidar.height_cap", c.lidar.height_cap, "(-5, 200] m");
-  require(c.camera.width == 0 || (c.camera.width >= 16 && c.camera.width <= 4096), "camera.width", c.camera.width,
-          "[16, 4096] px");
-  require(c.camera.height == 0 || (c.camera.height >= 16 && c.camera.height <= 4096), "camera.height", c.camera.height,
-          "[16, 4096] px");
-  require(std::isnan(c.camera.fovy_deg) || (c.camera.fovy_deg > 0 && c.camera.fovy_deg < 180), "camera.fovy_deg",
-          c.camera.fovy_deg, "(0, 180) deg");
-  require(std::isnan(c.camera.pitch_deg) || (c.camera.pitch_deg >= -45 && c.camera.pitch_deg <= 45), "camera.pitch_deg",
-          c.camera.pitch_deg, "[-45, 45] deg");
+  SimConfig fields = c;
+  forEachSimSetting(fields, SimRangeCheck{});
+  // relations between settings
+  io::requireInRange(c.lidar.min_range < c.lidar.max_range, "lidar.min_range", c.lidar.min_range,
+                     "[0, lidar.max_range) m");
   if (c.camera.enabled) {
     if (c.camera.cameras.empty()) cameraRig(c.camera.rig);  // throws for an unknown name
     const std::vector<CameraMount> rig = rigCameras(c.camera);
@@ -144,15 +234,6 @@ void validate(const SimConfig& c) {
       validateCamera(rig[i], field);
     }
   }
-  require(c.gps.rate_hz > 0 && c.gps.rate_hz <= 100, "gps.rate_hz", c.gps.rate_hz, "(0, 100] Hz");
-  require(c.gps.horizontal_sigma >= 0 && c.gps.horizontal_sigma <= 100, "gps.horizontal_sigma", c.gps.horizontal_sigma,
-          "[0, 100] m");
-  require(c.gps.vertical_sigma >= 0 && c.gps.vertical_sigma <= 100, "gps.vertical_sigma", c.gps.vertical_sigma,
-          "[0, 100] m");
-  require(c.gyro.rate_hz >= 100 && c.gyro.rate_hz <= 2000, "gyro.rate_hz", c.gyro.rate_hz, "[100, 2000] Hz");
-  require(c.gyro.noise_sigma >= 0 && c.gyro.noise_sigma <= 1, "gyro.noise_sigma", c.gyro.noise_sigma, "[0, 1] rad/s");
-  require(c.gyro.bias_sigma >= 0 && c.gyro.bias_sigma <= 1, "gyro.bias_sigma", c.gyro.bias_sigma, "[0, 1] rad/s");
-  require(c.threads >= 0 && c.threads <= 256, "threads", c.threads, "[0, 256]");
 }
 
 namespace {
@@ -197,67 +278,22 @@ std::vector<CameraMount> camerasFromYaml(const YAML::Node& list, const Vec3Sette
 }  // namespace
 
 void loadSimConfig(const std::filesystem::path& path, SimConfig& c) {
-  using io::Setter;
-  const auto num = io::numberSetter;
-  const auto integer = io::integerSetter;
-  auto vec3 = [](Eigen::Vector3d& f) {
-    return Setter([&f](const YAML::Node& n) {
-      if (!n.IsSequence() || n.size() != 3) throw YAML::Exception(n.Mark(), "expected [x, y, z]");
-      f = {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
-    });
-  };
-  const std::map<std::string, Setter> fields{
-      {"seed", [&c](const YAML::Node& n) { c.seed = n.as<std::uint64_t>(); }},
-      {"threads", integer(c.threads)},
-      {"robot.speed", num(c.robot.speed)},
-      {"robot.mast_height", num(c.robot.mast_height)},
-      {"robot.wheelbase", num(c.robot.wheelbase)},
-      {"robot.track", num(c.robot.track)},
-      {"lidar.calibration", [&c](const YAML::Node& n) { c.lidar.calibration = n.as<std::string>(); }},
-      {"lidar.rotation_hz", num(c.lidar.rotation_hz)},
-      {"lidar.firing_rate_hz", num(c.lidar.firing_rate_hz)},
-      {"lidar.max_range", num(c.lidar.max_range)},
-      {"lidar.min_range", num(c.lidar.min_range)},
-      {"lidar.range_noise", num(c.lidar.range_noise)},
-      {"lidar.laser_bias", num(c.lidar.laser_bias)},
-      {"lidar.dropout", num(c.lidar.dropout)},
-      {"lidar.height_cap", num(c.lidar.height_cap)},
-      {"camera.enabled", [&c](const YAML::Node& n) { c.camera.enabled = n.as<bool>(); }},
-      {"camera.rig", [&c](const YAML::Node& n) { c.camera.rig = n.as<std::string>(); }},
-      {"camera.width", integer(c.camera.width)},
-      {"camera.height", integer(c.camera.height)},
-      {"camera.fovy_deg", num(c.camera.fovy_deg)},
-      {"camera.pitch_deg", num(c.camera.pitch_deg)},
-      {"cameras", [&c, vec3](const YAML::Node& n) { c.camera.cameras = camerasFromYaml(n, vec3); }},
-      {"gps.rate_hz", num(c.gps.rate_hz)},
-      {"gps.horizontal_sigma", num(c.gps.horizontal_sigma)},
-      {"gps.vertical_sigma", num(c.gps.vertical_sigma)},
-      {"gps.antenna", vec3(c.gps.antenna)},
-      {"gyro.rate_hz", num(c.gyro.rate_hz)},
-      {"gyro.noise_sigma", num(c.gyro.noise_sigma)},
-      {"gyro.bias_sigma", num(c.gyro.bias_sigma)},
-  };
-  io::applySettings(path, fields, "robot, lidar, camera, gps, gyro");
+  SimSetters t;
+  forEachSimSetting(c, t);
+  t.setters["cameras"] = [&c](const YAML::Node& n) { c.camera.cameras = camerasFromYaml(n, vectorSetter); };
+  io::applySettings(path, t.setters, "robot, lidar, camera, gps, gyro");
 }
 
 std::string simConfigToJson(const SimConfig& c) {
   using nlohmann::json;
-  auto v3 = [](const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); };
-  json j;
-  j["seed"] = c.seed;
-  j["robot"] = {{"speed", c.robot.speed},
-                {"mast_height", c.robot.mast_height},
-                {"wheelbase", c.robot.wheelbase},
-                {"track", c.robot.track}};
-  j["lidar"] = {{"calibration", c.lidar.calibration},       {"rotation_hz", c.lidar.rotation_hz},
-                {"firing_rate_hz", c.lidar.firing_rate_hz}, {"max_range", c.lidar.max_range},
-                {"min_range", c.lidar.min_range},           {"range_noise", c.lidar.range_noise},
-                {"laser_bias", c.lidar.laser_bias},         {"dropout", c.lidar.dropout},
-                {"height_cap", c.lidar.height_cap}};
+  SimConfig fields = c;
+  SimJson out;
+  forEachSimSetting(fields, out);
+  // the cameras as they are put on the robot
   json cameras = json::array();
   for (const auto& m : rigCameras(c.camera)) {
     cameras.push_back({{"name", m.name},
-                       {"position", v3(m.position)},
+                       {"position", {m.position.x(), m.position.y(), m.position.z()}},
                        {"yaw_deg", m.yaw_deg},
                        {"pitch_deg", m.pitch_deg},
                        {"roll_deg", m.roll_deg},
@@ -265,14 +301,9 @@ std::string simConfigToJson(const SimConfig& c) {
                        {"height", m.height},
                        {"fovy_deg", m.fovy_deg}});
   }
-  j["camera"] = {{"enabled", c.camera.enabled}, {"rig", c.camera.cameras.empty() ? c.camera.rig : "custom"}};
-  j["cameras"] = cameras;
-  j["gps"] = {{"rate_hz", c.gps.rate_hz},
-              {"horizontal_sigma", c.gps.horizontal_sigma},
-              {"vertical_sigma", c.gps.vertical_sigma},
-              {"antenna", v3(c.gps.antenna)}};
-  j["gyro"] = {{"rate_hz", c.gyro.rate_hz}, {"noise_sigma", c.gyro.noise_sigma}, {"bias_sigma", c.gyro.bias_sigma}};
-  return j.dump();
+  if (!c.camera.cameras.empty()) out.j["camera"]["rig"] = "custom";
+  out.j["cameras"] = cameras;
+  return out.j.dump();
 }
 
 std::filesystem::path dataPath(const std::string& relative) {

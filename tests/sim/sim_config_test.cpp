@@ -144,5 +144,63 @@ TEST(SimConfigTest, BadFilesAreNamedWithTheLineAndField) {
   EXPECT_NE(errorOf(dir, "robot:\n  ? [x]\n  : 1\n").find("sim.yaml:2: a key that is not"), std::string::npos);
 }
 
+// Every setting set away from its default in one file: the JSON holds each of them, and the JSON
+// read back as a settings file (YAML reads JSON) gives the same settings: the file's names, the
+// JSON's and the list's agree for every setting.
+TEST(SimConfigTest, EverySettingRoundTripsThroughTheJson) {
+  test::TempDir dir;
+  io::writeFileAtomic(dir / "sim.yaml",
+                      "seed: 9\nthreads: 3\n"
+                      "robot: {speed: 1.5, mast_height: 2.0, wheelbase: 1.2, track: 0.8}\n"
+                      "lidar: {calibration: my_lasers.yaml, rotation_hz: 12, firing_rate_hz: 20000, max_range: 100,\n"
+                      "  min_range: 1.0, range_noise: 0.03, laser_bias: 0.01, dropout: 0.1, height_cap: 2.0}\n"
+                      "camera: {rig: forward, width: 320, height: 240, fovy_deg: 60, pitch_deg: 5}\n"
+                      "gps: {rate_hz: 5, horizontal_sigma: 0.1, vertical_sigma: 0.2, antenna: [-0.2, 0.1, 2.0]}\n"
+                      "gyro: {rate_hz: 100, noise_sigma: 0.001, bias_sigma: 0.0005}\n",
+                      true);
+  SimConfig a;
+  loadSimConfig(dir / "sim.yaml", a);
+  validate(a);
+  nlohmann::json ja = nlohmann::json::parse(simConfigToJson(a));
+  const nlohmann::json defaults = nlohmann::json::parse(simConfigToJson(SimConfig{}));
+  // every setting is in the JSON, away from its default (but camera.enabled, on in both)
+  std::size_t settings = 0;
+  for (const auto& [key, value] : ja.items()) {
+    if (key == "cameras") continue;
+    if (!value.is_object()) {
+      ++settings;
+      EXPECT_NE(value, defaults[key]) << key;
+      continue;
+    }
+    for (const auto& [field, v] : value.items()) {
+      ++settings;
+      if (key + "." + field != "camera.enabled") {
+        EXPECT_NE(v, defaults[key][field]) << key << "." << field;
+      }
+    }
+  }
+  EXPECT_EQ(settings, 28u);
+  EXPECT_EQ(ja["gps"]["antenna"], nlohmann::json::array({-0.2, 0.1, 2.0}));
+  // read back (without the cameras as put on the robot, which the rig and its settings give)
+  ja.erase("cameras");
+  io::writeFileAtomic(dir / "again.yaml", ja.dump(), true);
+  SimConfig b;
+  loadSimConfig(dir / "again.yaml", b);
+  validate(b);
+  EXPECT_EQ(simConfigToJson(b), simConfigToJson(a));
+}
+
+// A GPS antenna off the robot or not a number: refused by name, as a camera's position is.
+TEST(SimConfigTest, AGpsAntennaOffTheRobotIsRefused) {
+  test::TempDir dir;
+  EXPECT_NE(errorOf(dir, "gps:\n  antenna: [.nan, 0, 1.9]\n")
+                .find("gps.antenna = nan is out of range (allowed: [-5, 5] m per axis)"),
+            std::string::npos)
+      << errorOf(dir, "gps:\n  antenna: [.nan, 0, 1.9]\n");
+  EXPECT_NE(errorOf(dir, "gps:\n  antenna: [0, 0, 400]\n").find("gps.antenna = 400 is out of range"),
+            std::string::npos);
+  EXPECT_EQ(errorOf(dir, "gps:\n  antenna: [-0.3, 0, 1.9]\n"), "");
+}
+
 }  // namespace
 }  // namespace terrain::sim
