@@ -6,6 +6,7 @@
 #include "core/voxel_map.hpp"
 #include "scenes/scene_truth.hpp"
 #include "sim/world.hpp"
+#include "tests/core/core_test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,22 +17,6 @@
 #include <string>
 
 namespace terrain::test {
-
-// Appends one voxel of the given height and label at (cell, z), and the mesh vertex on top of it:
-// the lists VoxelMap::restore and TerrainMesh::restore take.
-inline void addColumn(std::vector<Voxel>& voxels, std::vector<MeshVertex>& vertices, const CellIndex& cell, int z,
-                      float height, VoxelLabel label) {
-  Voxel v;
-  v.index = VoxelIndex(cell.x(), cell.y(), z);
-  v.height = height;
-  v.label = label;
-  MeshVertex m;
-  m.cell = cell;
-  m.top_voxel = static_cast<std::uint32_t>(voxels.size());
-  m.sensed_height = height;
-  voxels.push_back(v);
-  vertices.push_back(m);
-}
 
 // A fresh directory under the system temp folder, removed when the object goes.
 class TempDir {

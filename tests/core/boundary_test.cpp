@@ -1,7 +1,7 @@
 #include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
 #include "core/camera_model.hpp"
-#include "tests/test_support.hpp"
+#include "tests/core/core_test_support.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>

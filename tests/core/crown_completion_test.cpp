@@ -1,6 +1,6 @@
 #include "core/crown_completion.hpp"
 #include "core/camera_model.hpp"
-#include "tests/test_support.hpp"
+#include "tests/core/core_test_support.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>

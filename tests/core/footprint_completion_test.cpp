@@ -1,5 +1,5 @@
 #include "core/footprint_completion.hpp"
-#include "tests/test_support.hpp"
+#include "tests/core/core_test_support.hpp"
 
 #include <gtest/gtest.h>
 
