@@ -285,9 +285,10 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       continue;
     }
     // a crown is at most max_width_to_depth times as wide as it is deep (its top above its lowest
-    // pixel on the vertical): wider, the runs took in crowns behind it on both sides
+    // pixel on the vertical): wider, the runs took in crowns behind it on both sides. A crown cut
+    // off by the image top is deeper than it shows: no bound
     const double lowest = heightAbove(centre, along(bottom + 1.0), t.centre.x(), t.centre.y());
-    if (std::isfinite(lowest) && cfg.max_width_to_depth > 0)
+    if (!cut && std::isfinite(lowest) && cfg.max_width_to_depth > 0)
       radius = std::min(radius, 0.5 * cfg.max_width_to_depth * std::max(0.0, height - lowest));
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
     const double reach = std::max(sky_cfg.max_distance, (t.centre - centre.head<2>()).norm() + cfg.max_radius);

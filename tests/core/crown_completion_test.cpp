@@ -317,6 +317,22 @@ TEST(CrownCompletionTest, ACrownCutOffByTheImageTopIsRaisedToItsBound) {
     EXPECT_FALSE(tree.at(17, 100).raised());
   }
   {
+    // drawn 170 px higher only the crown's lowest 18 rows show (0.8 m at the trunk's depth above
+    // a bound of 17.0 m, where its runs are 36 px either side: 2.35 m): a crown that shows so little
+    // of its depth is not bound by it (crown.max_width_to_depth), so the ground 1.8 m from the trunk
+    // is raised and 2.8 m from it is not
+    Tree tree;
+    CrownSampler sampler;
+    for (int frame = 0; frame < 3; ++frame)
+      EXPECT_EQ(
+          sampler.measure(tree.mesh, tree.map, tree.image(170), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::RaisedToBound);
+    EXPECT_TRUE(tree.at(9, 100).raised());
+    EXPECT_GT(tree.at(9, 100).height(), 15.5);
+    EXPECT_FALSE(tree.at(14, 100).raised());
+  }
+  {
     // without cut_off_tops such frames give nothing
     Tree tree;
     CrownSampler sampler;
