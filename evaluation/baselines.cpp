@@ -4,6 +4,7 @@
 #include <pcl/point_types.h>
 #include <pcl/segmentation/progressive_morphological_filter.h>
 #include <pcl/segmentation/sac_segmentation.h>
+#include <tbb/parallel_for.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
 
@@ -162,6 +163,172 @@ bool openOnGrid(const std::vector<float>& x, const std::vector<float>& y, const 
   return true;
 }
 
+// The same opening for points in general position (a raw scan), exact as well. The points are
+// bucketed on a grid of cells an eighth of the half window wide. A window's box covers whole cells
+// in its interior: a point's cell index is a non-decreasing function of its coordinate, so a point
+// in a cell strictly between those of the box's two bounds lies strictly between the bounds. Those
+// cells are read by rows from a sparse table of the rows' cell extremes. On the box's edge columns
+// (rows) only the bound across them is to be tested: the cell's points sorted along x (y) with the
+// extreme of every prefix and suffix answer it by one binary search. The four corner cells are
+// tested point by point. Far fewer points are touched than PCL's octree visits.
+class ScatteredOpening {
+ public:
+  ScatteredOpening(const std::vector<float>& x, const std::vector<float>& y, float half) : x_(x), y_(y), half_(half) {
+    const std::size_t n = x.size();
+    const auto [x_lo, x_hi] = std::minmax_element(x.begin(), x.end());
+    const auto [y_lo, y_hi] = std::minmax_element(y.begin(), y.end());
+    x0_ = *x_lo, y0_ = *y_lo;
+    // cells an eighth of the half window, coarser where that would make the grid too large
+    const std::size_t max_cells = std::max<std::size_t>(std::size_t{1} << 20, 8 * n);
+    cell_ = std::max(static_cast<double>(half) / 8, 1e-6);
+    for (;; cell_ *= 2) {
+      const double nx = std::floor((static_cast<double>(*x_hi) - x0_) / cell_) + 1;
+      const double ny = std::floor((static_cast<double>(*y_hi) - y0_) / cell_) + 1;
+      if (nx * ny <= static_cast<double>(max_cells)) {
+        nx_ = static_cast<std::size_t>(nx), ny_ = static_cast<std::size_t>(ny);
+        break;
+      }
+    }
+    // the points by cell (row-major, y rows), within a cell once along x and once along y
+    std::vector<std::size_t> cell_of(n);
+    start_.assign(nx_ * ny_ + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      cell_of[i] = cellY(y[i]) * nx_ + cellX(x[i]);
+      ++start_[cell_of[i] + 1];
+    }
+    std::partial_sum(start_.begin(), start_.end(), start_.begin());
+    by_x_.resize(n);
+    std::vector<std::size_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) by_x_[fill[cell_of[i]]++] = static_cast<std::uint32_t>(i);
+    by_y_ = by_x_;
+    for (std::size_t c = 0; c + 1 < start_.size(); ++c) {
+      const auto b = start_[c], e = start_[c + 1];
+      if (e - b < 2) continue;
+      std::sort(by_x_.begin() + b, by_x_.begin() + e,
+                [&](std::uint32_t i, std::uint32_t j) { return x[i] < x[j] || (x[i] == x[j] && i < j); });
+      std::sort(by_y_.begin() + b, by_y_.begin() + e,
+                [&](std::uint32_t i, std::uint32_t j) { return y[i] < y[j] || (y[i] == y[j] && i < j); });
+    }
+    xs_.resize(n), ys_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) xs_[k] = x[by_x_[k]], ys_[k] = y[by_y_[k]];
+  }
+
+  // For every point, the smallest (largest, with `larger`) value over the points in its box.
+  void extreme(const std::vector<float>& value, bool larger, std::vector<float>& out) {
+    const std::size_t n = value.size(), cells = nx_ * ny_;
+    const float none = larger ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity();
+    const auto pick = [larger](float a, float b) { return larger ? std::max(a, b) : std::min(a, b); };
+    // prefix and suffix extremes within each cell, along x and along y
+    pre_x_.resize(n), suf_x_.resize(n), pre_y_.resize(n), suf_y_.resize(n);
+    table_.assign(1, std::vector<float>(cells, none));
+    std::vector<float>& level0 = table_[0];
+    for (std::size_t c = 0; c < cells; ++c) {
+      const auto b = start_[c], e = start_[c + 1];
+      if (b == e) continue;
+      float px = none, py = none;
+      for (auto k = b; k < e; ++k) {
+        px = pre_x_[k] = pick(px, value[by_x_[k]]);
+        py = pre_y_[k] = pick(py, value[by_y_[k]]);
+      }
+      float sx = none, sy = none;
+      for (auto k = e; k-- > b;) {
+        sx = suf_x_[k] = pick(sx, value[by_x_[k]]);
+        sy = suf_y_[k] = pick(sy, value[by_y_[k]]);
+      }
+      level0[c] = px;
+    }
+    // sparse table along rows: level j holds the extreme of 2^j cells from each cell on
+    for (std::size_t span = 2; span <= nx_; span *= 2) {
+      const std::vector<float>& below = table_.back();
+      std::vector<float> level(cells, none);
+      for (std::size_t r = 0; r < ny_; ++r) {
+        for (std::size_t cx = 0; cx + span <= nx_; ++cx)
+          level[r * nx_ + cx] = pick(below[r * nx_ + cx], below[r * nx_ + cx + span / 2]);
+      }
+      table_.push_back(std::move(level));
+    }
+    out.resize(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { out[i] = query(i, value, larger, none); });
+  }
+
+ private:
+  std::size_t cellX(float v) const {
+    const double c = std::floor((static_cast<double>(v) - x0_) / cell_);
+    return c <= 0 ? 0 : std::min(nx_ - 1, static_cast<std::size_t>(c));
+  }
+  std::size_t cellY(float v) const {
+    const double c = std::floor((static_cast<double>(v) - y0_) / cell_);
+    return c <= 0 ? 0 : std::min(ny_ - 1, static_cast<std::size_t>(c));
+  }
+
+  float query(std::size_t i, const std::vector<float>& value, bool larger, float none) const {
+    const auto pick = [larger](float a, float b) { return larger ? std::max(a, b) : std::min(a, b); };
+    // PCL's box, in float
+    const float ax = x_[i] - half_, bx = x_[i] + half_, ay = y_[i] - half_, by = y_[i] + half_;
+    const std::size_t cx0 = cellX(ax), cx1 = cellX(bx), cy0 = cellY(ay), cy1 = cellY(by);
+    float best = none;
+    const auto scan = [&](std::size_t cx, std::size_t cy) {
+      const std::size_t c = cy * nx_ + cx;
+      for (auto k = start_[c]; k < start_[c + 1]; ++k) {
+        const std::uint32_t j = by_x_[k];
+        if (x_[j] >= ax && x_[j] <= bx && y_[j] >= ay && y_[j] <= by) best = pick(best, value[j]);
+      }
+    };
+    if (cx1 - cx0 < 2 || cy1 - cy0 < 2) {
+      for (std::size_t cy = cy0; cy <= cy1; ++cy) {
+        for (std::size_t cx = cx0; cx <= cx1; ++cx) scan(cx, cy);
+      }
+      return best;
+    }
+    // interior rows: whole cells
+    const std::size_t width = cx1 - cx0 - 1;
+    std::size_t level = 0;
+    while ((std::size_t{2} << level) <= width) ++level;
+    const std::vector<float>& t = table_[level];
+    const std::size_t left = cx0 + 1, right = cx1 - (std::size_t{1} << level);
+    for (std::size_t cy = cy0 + 1; cy < cy1; ++cy) best = pick(best, pick(t[cy * nx_ + left], t[cy * nx_ + right]));
+    // edge cells: only the bound across them is tested, on their points sorted along it
+    const auto from = [&](const std::vector<float>& along, const std::vector<float>& suffix, std::size_t c,
+                          float bound) {
+      const auto k = std::lower_bound(along.begin() + start_[c], along.begin() + start_[c + 1], bound) - along.begin();
+      if (static_cast<std::size_t>(k) < start_[c + 1]) best = pick(best, suffix[k]);
+    };
+    const auto upTo = [&](const std::vector<float>& along, const std::vector<float>& prefix, std::size_t c,
+                          float bound) {
+      const auto k = std::upper_bound(along.begin() + start_[c], along.begin() + start_[c + 1], bound) - along.begin();
+      if (static_cast<std::size_t>(k) > start_[c]) best = pick(best, prefix[k - 1]);
+    };
+    for (std::size_t cy = cy0 + 1; cy < cy1; ++cy)
+      from(xs_, suf_x_, cy * nx_ + cx0, ax), upTo(xs_, pre_x_, cy * nx_ + cx1, bx);
+    for (std::size_t cx = cx0 + 1; cx < cx1; ++cx)
+      from(ys_, suf_y_, cy0 * nx_ + cx, ay), upTo(ys_, pre_y_, cy1 * nx_ + cx, by);
+    scan(cx0, cy0), scan(cx1, cy0), scan(cx0, cy1), scan(cx1, cy1);
+    return best;
+  }
+
+  const std::vector<float>& x_;
+  const std::vector<float>& y_;
+  float half_;
+  double x0_ = 0, y0_ = 0, cell_ = 1;
+  std::size_t nx_ = 1, ny_ = 1;
+  std::vector<std::size_t> start_;          // per cell, its first entry in by_x_ and by_y_
+  std::vector<std::uint32_t> by_x_, by_y_;  // point ids by cell, along x / along y within it
+  std::vector<float> xs_, ys_;              // their coordinates in that order
+  std::vector<float> pre_x_, suf_x_, pre_y_, suf_y_;
+  std::vector<std::vector<float>> table_;
+};
+
+// PCL's opening (as openOnGrid) of points in general position.
+void openScattered(const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& z,
+                   float resolution, std::vector<float>& opened) {
+  opened.clear();
+  if (x.empty()) return;
+  ScatteredOpening boxes(x, y, resolution / 2.0f);
+  std::vector<float> eroded;
+  boxes.extreme(z, false, eroded);
+  boxes.extreme(eroded, true, opened);
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>& points,
@@ -193,7 +360,7 @@ std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>&
       x[k] = static_cast<float>(p.x()), y[k] = static_cast<float>(p.y()), z[k] = static_cast<float>(p.z());
     }
     if (!openOnGrid(x, y, z, windows[i], std::max<std::size_t>(std::size_t{1} << 22, 16 * points.size()), opened))
-      return groundByMorphologicalFilterPcl(points, c);
+      openScattered(x, y, z, windows[i], opened);
     std::vector<std::size_t> kept;
     for (std::size_t k = 0; k < ground.size(); ++k) {
       if (z[k] - opened[k] < thresholds[i]) kept.push_back(ground[k]);

@@ -35,8 +35,9 @@ struct MorphologicalFilterConfig {
 };
 // PCL's ProgressiveMorphologicalFilter, with PCL's default exponential windows (base 2). Points
 // that lie on a grid of shared x and y coordinates (the columns of a voxel map) are filtered on that
-// grid with the same result, far faster: PCL searches its octree once per point and window; other
-// point sets (a raw scan) go to PCL itself.
+// grid with the same result, far faster: PCL searches its octree once per point and window. Other
+// point sets (a raw scan) are bucketed on a fine grid whose boxes are answered from whole cells and
+// sorted edge cells, again with PCL's labels. Points with a non-finite coordinate go to PCL itself.
 std::vector<std::uint8_t> groundByMorphologicalFilter(const std::vector<Point3>& points,
                                                       const MorphologicalFilterConfig& config);
 // The same, always by PCL (the reference the grid is tested against).

@@ -5,6 +5,7 @@
 #include "core/ground_segmentation.hpp"
 #include "core/pipeline.hpp"
 #include "core/random.hpp"
+#include "evaluation/baselines.hpp"
 #include "evaluation/kitti.hpp"
 #include "rig/kitti.hpp"
 #include "scenes/scene_generator.hpp"
@@ -322,6 +323,21 @@ void BM_KittiScanSegmentation(benchmark::State& state) {
 }
 BENCHMARK(BM_KittiScanSegmentation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// the progressive morphological filter baseline on one real scan: ours (0, bucketed boxes) against
+// PCL's octree (1), with the same labels
+void BM_KittiScanMorphologicalFilter(benchmark::State& state) {
+  static const rig::KittiScan scan =
+      rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
+  const eval::MorphologicalFilterConfig cfg;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize((state.range(0) == 0 ? eval::groundByMorphologicalFilter(scan.points, cfg)
+                                                  : eval::groundByMorphologicalFilterPcl(scan.points, cfg))
+                                 .data());
+  }
+}
+BENCHMARK(BM_KittiScanMorphologicalFilter)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+BENCHMARK(BM_KittiScanMorphologicalFilter)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
 // decoding one second of HDL-64E traffic (10 sweeps, every laser returning)
 void BM_PacketDecode(benchmark::State& state) {
   static const auto packets = [] {
@@ -523,6 +539,12 @@ int main(int argc, char** argv) {
                 static_cast<double>(r->counters.at("frame_median_ms")), "<= 100 ms", "");
     std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (p95)",
                 static_cast<double>(r->counters.at("frame_p95_ms")), "", "");
+  }
+  if (const auto* r = get("BM_KittiScanMorphologicalFilter/0/")) {
+    const auto* pcl = get("BM_KittiScanMorphologicalFilter/1/");
+    std::printf("%-44s %11.1f ms %16s %11.1fx\n", "one real KITTI scan, morphological filter", ms(*r), "",
+                pcl ? ms(*pcl) / ms(*r) : 0.0);
+    if (pcl) std::printf("%-44s %11.1f ms %16s %12s\n", "the same by PCL's octree (baseline)", ms(*pcl), "", "1.0x");
   }
   if (const auto* r = get("BM_PacketDecode")) {
     // the real sensor sends 20,833 firings/s, 6 a packet
