@@ -7,6 +7,7 @@
 #include "scenes/scene_truth.hpp"
 #include "sim/world.hpp"
 #include "tests/core/core_test_support.hpp"
+#include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,24 +18,6 @@
 #include <string>
 
 namespace terrain::test {
-
-// A fresh directory under the system temp folder, removed when the object goes.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            ("terrain_test_" + std::string(info ? info->name() : "x") + "_" + std::to_string(::getpid()));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() { std::filesystem::remove_all(path_); }
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  std::filesystem::path path_;
-};
 
 // For tests that drive the command line: the terrain executable, the committed urban scene, and a
 // shell command's exit status as std::system returns it.

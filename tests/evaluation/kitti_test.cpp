@@ -3,7 +3,7 @@
 #include "evaluation/metrics.hpp"
 #include "rig/file_io.hpp"
 #include "rig/kitti.hpp"
-#include "tests/test_support.hpp"
+#include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 
