@@ -1,5 +1,5 @@
-#include "core/boundary_detection.hpp"
 #include "core/boundary_estimation.hpp"
+#include "core/boundary_detection.hpp"
 #include "core/camera_model.hpp"
 #include "tests/core/core_test_support.hpp"
 
@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace terrain {
@@ -34,154 +35,6 @@ cv::Mat boundaryRowThrough(const CameraIntrinsics& k, const Pose& world_from_cam
   return boundary;
 }
 
-TEST(BoundaryDetectionTest, BoxAgainstTheSkyGivesItsTopOnTheKnownRows) {
-  // sky above row 100, a dark box from row 100 down in columns 60-180, and ground below row 200
-  cv::Mat img(240, 320, CV_8UC3, cv::Scalar(200, 220, 255));
-  cv::rectangle(img, cv::Rect(60, 100, 120, 140), cv::Scalar(60, 60, 70), cv::FILLED);
-  cv::Mat speck = img.clone();
-  speck.at<cv::Vec3b>(30, 250) = cv::Vec3b(0, 0, 0);  // one noisy pixel in the sky
-  const BoundaryImages b = detectBoundaries(speck, BoundaryDetectionConfig{});
-  // the box top: boundary pixels only on rows 99-100 (the kernel straddles the edge), in its columns
-  for (int col = 70; col < 170; col += 10) {
-    int first = -1;
-    for (int row = 0; row < 240; ++row) {
-      if (b.cleaned.at<std::uint8_t>(row, col)) {
-        first = row;
-        break;
-      }
-    }
-    EXPECT_GE(first, 98) << col;
-    EXPECT_LE(first, 100) << col;
-  }
-  // the speck is in the raw response and gone after erosion and dilation
-  EXPECT_TRUE(b.raw.at<std::uint8_t>(30, 250) || b.raw.at<std::uint8_t>(29, 250));
-  EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(230, 10, 40, 40))), 0);
-  EXPECT_THROW(detectBoundaries(cv::Mat(), BoundaryDetectionConfig{}), std::invalid_argument);
-}
-
-TEST(BoundaryDetectionTest, ErosionInAllDirectionsKeepsASlopingEdge) {
-  // a dark roof sloping at 45 degrees against the sky (its edge from (40, 160) up to (160, 40)),
-  // and two single-pixel specks in the sky
-  cv::Mat img(240, 320, CV_8UC1, cv::Scalar(220));
-  const std::vector<cv::Point> roof{{40, 160}, {160, 40}, {280, 160}, {280, 239}, {40, 239}};
-  cv::fillPoly(img, std::vector<std::vector<cv::Point>>{roof}, cv::Scalar(60));
-  img.at<std::uint8_t>(20, 40) = 0;
-  img.at<std::uint8_t>(30, 290) = 0;
-  BoundaryDetectionConfig c;
-  // boundary pixels within 2 px of the sloping edge's middle half, (70, 130) to (130, 70)
-  auto on_edge = [](const cv::Mat& b) {
-    int n = 0;
-    for (int x = 70; x <= 130; ++x) {
-      const int y = 200 - x;
-      n += cv::countNonZero(b(cv::Rect(x, y - 2, 1, 5))) > 0;
-    }
-    return n;
-  };
-  c.erode_sloping = false;  // the one horizontal erosion when erode_all_directions is off
-  for (const bool all : {true, false}) {
-    c.erode_all_directions = all;
-    const BoundaryImages b = detectBoundaries(img, c);
-    EXPECT_EQ(on_edge(b.raw), 61);
-    // kept in every column of it when eroding along all directions; a horizontal-only erosion
-    // leaves nothing of a 45-degree edge one pixel wide per row
-    if (all)
-      EXPECT_EQ(on_edge(b.cleaned), 61);
-    else
-      EXPECT_LT(on_edge(b.cleaned), 10);
-    // the specks go either way
-    EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(30, 10, 20, 20))), 0) << all;
-    EXPECT_EQ(cv::countNonZero(b.cleaned(cv::Rect(280, 20, 20, 20))), 0) << all;
-  }
-}
-
-TEST(BoundaryDetectionTest, SlopingErosionKeepsAnObliqueRoofLineButNotACrownsOutline) {
-  // a roof line seen obliquely, rising a row per column from (20, 150) to (120, 50), against the
-  // sky, and two single-pixel specks in the sky
-  const cv::Vec3b sky(150, 190, 240), facade(120, 100, 90), leaves(40, 110, 40);
-  auto scene = [&](const cv::Vec3b& body) {
-    cv::Mat img(200, 320, CV_8UC3, sky);
-    const std::vector<cv::Point> roof{{20, 150}, {120, 50}, {300, 50}, {300, 199}, {20, 199}};
-    cv::fillPoly(img, std::vector<std::vector<cv::Point>>{roof}, body);
-    img.at<cv::Vec3b>(20, 40) = cv::Vec3b(0, 0, 0);
-    img.at<cv::Vec3b>(30, 250) = cv::Vec3b(0, 0, 0);
-    return img;
-  };
-  // columns of the roof line's middle, 40 to 100, with a boundary pixel within 2 rows of it
-  auto on_line = [](const cv::Mat& b) {
-    int n = 0;
-    for (int x = 40; x <= 100; ++x) {
-      const int y = 150 - (x - 20);
-      n += cv::countNonZero(b(cv::Rect(x, y - 2, 1, 5))) > 0;
-    }
-    return n;
-  };
-  BoundaryDetectionConfig c;
-  ASSERT_TRUE(c.erode_sloping);  // on by default
-  const BoundaryImages sloping = detectBoundaries(scene(facade), c);
-  EXPECT_EQ(on_line(sloping.raw), 61);
-  EXPECT_EQ(on_line(sloping.cleaned), 61);
-  c.erode_sloping = false;
-  const BoundaryImages level = detectBoundaries(scene(facade), c);
-  EXPECT_EQ(on_line(level.raw), 61);
-  // a run of a pixel or two per row: the horizontal mask leaves little of it
-  EXPECT_LT(on_line(level.cleaned), 10) << on_line(level.cleaned);
-  // the specks go either way
-  for (const BoundaryImages* b : {&sloping, &level}) {
-    EXPECT_EQ(cv::countNonZero(b->cleaned(cv::Rect(30, 10, 20, 20))), 0);
-    EXPECT_EQ(cv::countNonZero(b->cleaned(cv::Rect(240, 20, 20, 20))), 0);
-  }
-  // the same outline in foliage colours is left to the horizontal mask
-  c.erode_sloping = true;
-  const BoundaryImages crown = detectBoundaries(scene(leaves), c);
-  EXPECT_EQ(on_line(crown.raw), 61);
-  c.erode_sloping = false;
-  EXPECT_EQ(on_line(crown.cleaned), on_line(detectBoundaries(scene(leaves), c).cleaned));
-}
-
-TEST(BoundaryDetectionTest, FoliageMaskFollowsThePerPixelRule) {
-  // every red and blue level against green levels around them, margins of 0, 10 and 40
-  cv::Mat rgb(256, 256 * 3, CV_8UC3);
-  for (int r = 0; r < 256; ++r) {
-    for (int x = 0; x < rgb.cols; ++x) {
-      const int g = x % 256, b = (x / 256) * 120;
-      rgb.at<cv::Vec3b>(r, x) =
-          cv::Vec3b(static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b));
-    }
-  }
-  for (const int margin : {0, 10, 40}) {
-    const cv::Mat mask = foliageMask(rgb, margin);
-    ASSERT_EQ(mask.type(), CV_8UC1);
-    int disagree = 0, foliage = 0;
-    for (int v = 0; v < rgb.rows; ++v) {
-      for (int u = 0; u < rgb.cols; ++u) {
-        const bool rule = looksLikeFoliage(rgb.at<cv::Vec3b>(v, u), margin);
-        disagree += rule != (mask.at<std::uint8_t>(v, u) == 255);
-        foliage += rule;
-      }
-    }
-    EXPECT_EQ(disagree, 0) << "margin " << margin;
-    EXPECT_GT(foliage, 0) << "margin " << margin;
-  }
-  // the rule itself, by hand: green 10 above red and blue is foliage at margin 10, 9 above is not
-  EXPECT_TRUE(looksLikeFoliage(cv::Vec3b(40, 50, 40), 10));
-  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(41, 50, 40), 10));
-  EXPECT_FALSE(looksLikeFoliage(cv::Vec3b(40, 50, 41), 10));
-  EXPECT_THROW(foliageMask(cv::Mat(4, 4, CV_8UC1, cv::Scalar(0)), 10), std::invalid_argument);
-}
-
-TEST(BoundaryDetectionTest, VerticalChangesWeighMoreThanHorizontal) {
-  cv::Mat horizontal_edge(50, 50, CV_8UC1, cv::Scalar(0)), vertical_edge(50, 50, CV_8UC1, cv::Scalar(0));
-  horizontal_edge(cv::Rect(0, 25, 50, 25)).setTo(100);
-  vertical_edge(cv::Rect(25, 0, 25, 50)).setTo(100);
-  const BoundaryDetectionConfig c;  // kx < ky
-  double mh = 0, mv = 0;
-  cv::minMaxLoc(detectBoundaries(horizontal_edge, c).magnitude, nullptr, &mh);
-  cv::minMaxLoc(detectBoundaries(vertical_edge, c).magnitude, nullptr, &mv);
-  // same step: (a + b + a) * 100 = 400 per kernel; weights sqrt(ky) and sqrt(kx)
-  EXPECT_NEAR(mh, 400 * std::sqrt(c.ky), 1e-3);
-  EXPECT_NEAR(mv, 400 * std::sqrt(c.kx), 1e-3);
-}
-
 TEST(BoundaryEstimationTest, InverseProjectionOfAKnownTopPixelGivesTheExactHeight) {
   // camera 1.6 m up looking north (+y), level; a wall top 12 m high at y = 20
   const CameraIntrinsics k = CameraIntrinsics::fromFovy(640, 480, 75 * M_PI / 180);
@@ -203,12 +56,6 @@ TEST(BoundaryEstimationTest, InverseProjectionOfAKnownTopPixelGivesTheExactHeigh
   // the pixel centre lies within half a pixel of the projected top: about 2 cm at 20 m
   EXPECT_NEAR(mesh.vertices()[0].height(), 12.0, 0.05);
 }
-
-}  // namespace
-}  // namespace terrain
-
-namespace terrain {
-namespace {
 
 // with the sky test on, a top boundary with sky above gives an estimate and one with more of
 // the object above (cut off by the image top) does not
@@ -784,34 +631,6 @@ TEST(BoundaryEstimationTest, EstimatesSpreadOverTheirObjectOnlyAndOnlySoFar) {
   EXPECT_FLOAT_EQ(v[1].height(), 2.0f);
   EXPECT_TRUE(v[0].raised());
 }
-
-TEST(TerrainMeshTest, TrianglesUseOnlyExistingVertices) {
-  // cells (0,0) (1,0) (0,1) (1,1) and (2,0): the full quad at (0,0) gives 2 triangles; at (1,0)
-  // the corner (2,1) is missing, so one triangle (1,0) (2,0) (1,1); nothing else
-  TerrainMesh mesh;
-  std::vector<MeshVertex> vs;
-  for (const CellIndex& c : {CellIndex(0, 0), CellIndex(1, 0), CellIndex(0, 1), CellIndex(1, 1), CellIndex(2, 0)}) {
-    MeshVertex m;
-    m.cell = c;
-    vs.push_back(m);
-  }
-  ASSERT_TRUE(mesh.restore(vs));
-  EXPECT_EQ(mesh.find(CellIndex(5, 5)), -1);
-  EXPECT_EQ(mesh.find(CellIndex(2, 0)), 4);
-  const auto tris = mesh.triangles();
-  EXPECT_EQ(tris.size(), 3u);
-  for (const auto& t : tris) {
-    for (auto i : t) EXPECT_LT(i, vs.size());
-  }
-  // two vertices of one cell are refused
-  vs.push_back(vs.front());
-  EXPECT_FALSE(mesh.restore(vs));
-  EXPECT_TRUE(mesh.vertices().empty());
-}
-
-// Cells on both sides of zero and across the edges of the mesh's index blocks (32 cells): every
-// vertex is found at its cell whether it came from voxels or from a saved mesh, no other cell has
-// one, and the bounds are the cells' extremes.
 // Every point within reach that a camera sees lies in its view region, whichever way it looks; the
 // region of a level camera is the sector its image spans, not the square around it.
 TEST(BoundaryEstimationTest, TheViewRegionHoldsEveryPointTheCameraSeesWithinReach) {
@@ -856,56 +675,6 @@ TEST(BoundaryEstimationTest, TheViewRegionHoldsEveryPointTheCameraSeesWithinReac
   const Eigen::AlignedBox2d square = viewRegion(k, down, reach, 0.0);
   EXPECT_NEAR(square.min().x(), -reach, 1e-9);
   EXPECT_NEAR(square.max().y(), reach, 1e-9);
-}
-
-TEST(TerrainMeshTest, FindsEveryVertexOnBothSidesOfZeroAndAcrossBlocks) {
-  std::vector<CellIndex> cells;
-  for (int y = -70; y <= 70; y += 7) {
-    for (int x : {-65, -64, -33, -32, -31, -1, 0, 1, 31, 32, 33, 63, 64}) cells.emplace_back(x, y);
-  }
-  VoxelMap map(VoxelMapConfig{0.2});
-  std::vector<Point3> points;
-  for (const CellIndex& c : cells) points.emplace_back((c.x() + 0.5) * 0.2, (c.y() + 0.5) * 0.2, 1.0);
-  map.insert(points, 0);
-  TerrainMesh mesh;
-  mesh.update(map, map.takeNewVoxels());
-  ASSERT_EQ(mesh.vertices().size(), cells.size());
-  TerrainMesh saved;
-  ASSERT_TRUE(saved.restore(mesh.vertices()));
-  for (const TerrainMesh* m : {&mesh, &saved}) {
-    for (std::size_t i = 0; i < m->vertices().size(); ++i) EXPECT_EQ(m->find(m->vertices()[i].cell), std::int64_t(i));
-    for (const CellIndex& c : cells) {
-      EXPECT_EQ(m->find(c + CellIndex(0, 1)), -1) << c.transpose();  // rows are 7 cells apart
-    }
-    EXPECT_EQ(m->find(CellIndex(-2, -70)), -1);
-    EXPECT_EQ(m->find(CellIndex(1000, -1000)), -1);
-    EXPECT_EQ(m->cellBounds().first, CellIndex(-65, -70));
-    EXPECT_EQ(m->cellBounds().second, CellIndex(64, 70));
-    // a box of cells on both sides of zero visits exactly the vertices in it, each once; an empty
-    // box (lo above hi) none
-    const std::pair<CellIndex, CellIndex> boxes[] = {{CellIndex(-40, -30), CellIndex(33, 14)},
-                                                     {CellIndex(-65, -70), CellIndex(64, 70)},
-                                                     {CellIndex(-1000, 0), CellIndex(1000, 0)},
-                                                     {CellIndex(5, 5), CellIndex(4, 9)}};
-    for (const auto& [lo, hi] : boxes) {
-      std::vector<std::uint32_t> visited, expected;
-      m->forEachInCells(lo, hi, [&](std::uint32_t id, const CellIndex& c) {
-        EXPECT_EQ(m->vertices()[id].cell, c);
-        visited.push_back(id);
-      });
-      for (std::uint32_t i = 0; i < m->vertices().size(); ++i) {
-        const CellIndex c = m->vertices()[i].cell;
-        if ((c.array() >= lo.array()).all() && (c.array() <= hi.array()).all()) expected.push_back(i);
-      }
-      std::sort(visited.begin(), visited.end());
-      EXPECT_EQ(visited, expected) << lo.transpose() << " .. " << hi.transpose();
-    }
-  }
-  // a second voxel higher in a column moves that column's top, not its vertex
-  map.insert({Point3((32 + 0.5) * 0.2, (0 + 0.5) * 0.2, 3.0)}, 1);
-  mesh.update(map, map.takeNewVoxels());
-  EXPECT_EQ(mesh.vertices().size(), cells.size());
-  EXPECT_NEAR(mesh.vertices()[mesh.find(CellIndex(32, 0))].sensed_height, 3.0, 0.11);
 }
 
 }  // namespace
