@@ -173,6 +173,8 @@ void refuse(const rig::CaptureScan& scan, bool strict) {
 
 int inspect(const LidarCommands& c) {
   const rig::CaptureScan scan = rig::scanCapture(c.file, captureOptions(c, "--lidar-time-base"));
+  // a file that could not be read at all (missing, not a capture) has nothing to summarise
+  if (scan.read.frames == 0) refuse(scan, c.strict);
   if (c.json == "-") {
     std::cout << captureJson(scan).dump(1) << "\n";
   } else {

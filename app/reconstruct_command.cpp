@@ -29,9 +29,14 @@ class ReconstructCommand : public Command {
     cli_->add_flag("--force", force_,
                    "replace an existing, non-empty output directory (whole, once the new one is complete)");
     addLidarOptions(*cli_, lidar_, "the dataset");
-    cli_->add_option("--mast-height", lidar_.mast_height,
-                     "[m] lidar height above the ground, for a capture reconstructed alone")
-        ->capture_default_str();
+    auto* mast = cli_->add_option("--mast-height", lidar_.mast_height,
+                                  "[m] lidar height above the ground, for a capture reconstructed alone")
+                     ->capture_default_str();
+    cli_->add_option("--sensors", sensors_,
+                     "with --lidar pcap:FILE and no --input: a folder with the rig's calibration.json, camera "
+                     "images (camera/NAME/images.csv: time_s,file) and gyro.csv recorded beside the capture, "
+                     "timed in its clock (layout in docs/velodyne.md); the calibration places the lidar")
+        ->excludes(mast);
     addScoringOptions(*cli_, scoring_);
     addPipelineOptions(*cli_, config_);
   }
@@ -41,9 +46,11 @@ class ReconstructCommand : public Command {
     if (input_.empty()) {
       if (lidar_.endpoint.empty())
         throw io::InputError("give --input DATASET, or --lidar pcap:FILE to reconstruct a capture alone");
-      reconstructCapture(lidar_, config_, out_, force_, scoring_);
+      reconstructCapture(lidar_, config_, out_, force_, scoring_, sensors_);
       return 0;
     }
+    if (!sensors_.empty())
+      throw io::InputError("--sensors applies to a capture reconstructed alone (--lidar pcap:FILE without --input)");
     auto dataset = std::make_unique<rig::DatasetSource>(input_);
     // a dataset recorded from a scene still on disk can be scored against it
     std::shared_ptr<sim::World> world;
@@ -79,7 +86,7 @@ class ReconstructCommand : public Command {
   }
 
  private:
-  fs::path input_, out_;
+  fs::path input_, out_, sensors_;
   bool force_ = false;
   LidarChoice lidar_;
   eval::EvaluationOptions scoring_;

@@ -225,7 +225,7 @@ nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, c
 }
 
 nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const PipelineConfig& pipe_cfg, const fs::path& out,
-                                  bool force, const eval::EvaluationOptions& scoring) {
+                                  bool force, const eval::EvaluationOptions& scoring, const fs::path& sensors_dir) {
   const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
   if (endpoint.kind != rig::LidarEndpoint::Kind::Pcap) {
     throw io::InputError("--lidar " + lidar_choice.endpoint +
@@ -239,19 +239,35 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
   capture.calibration = lidar_choice.calibration;
   capture.time_base = parseTimeBase(lidar_choice.time_base, "--lidar-time-base");
   capture.lidar = lidar_choice.options;
-  rig::CaptureSource source(endpoint.path, capture, lidar_choice.mast_height);
+  std::shared_ptr<const rig::SensorFolder> sensors;
+  if (!sensors_dir.empty()) sensors = std::make_shared<rig::SensorFolder>(sensors_dir);
+  rig::CaptureSource source(endpoint.path, capture, lidar_choice.mast_height, sensors);
   const auto& setup = source.setup();
   if (lidar_choice.strict) refuseCutOff(endpoint.path, setup.cut_off);
   refuseInputInside(out, endpoint.path, "--lidar");
+  if (sensors) refuseInputInside(out, sensors_dir, "--sensors");
+  // what the rest of the rig is
+  std::string others = "no camera, no gyro";
+  if (sensors) {
+    const auto& cameras = sensors->calibration().cameras;
+    others = std::to_string(cameras.size()) + (cameras.size() == 1 ? " camera (" : " cameras (");
+    for (std::size_t c = 0; c < cameras.size(); ++c) others += (c ? ", " : "") + cameras[c].name;
+    others += ", " + std::to_string(sensors->images()) + " images) and " +
+              (sensors->gyroSamples() ? std::to_string(sensors->gyroSamples()) + " gyro samples" : "no gyro") +
+              " from " + sensors_dir.string();
+  }
   io::StagedDirectory staged(out, force);
   std::cout << "reconstruct: " << endpoint.path << ", an " << rig::velodyne::modelName(setup.model)
             << " capture, calibration " << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0)
-            << setup.time_base << " s from the " << setup.time_base_source
-            << "; no camera, no gyro; unscored (a real capture has no ground truth)\n";
+            << setup.time_base << " s from the " << setup.time_base_source << "; " << others
+            << "; unscored (a real capture has no ground truth)\n";
   nlohmann::json report = reconstruct(source, pipe_cfg, staged.path(), nullptr, scoring);
-  std::vector<std::string> notes = {
-      "unscored: a real capture has no ground truth; no camera images and no gyro, so nothing "
-      "above the lidar's reach is recovered and the heading comes from the GPS track alone"};
+  std::vector<std::string> notes = {"unscored: a real capture has no ground truth"};
+  if (!sensors || sensors->calibration().cameras.empty())
+    notes.push_back("no camera images, so nothing above the lidar's reach is recovered");
+  if (!sensors || sensors->gyroSamples() == 0)
+    notes.push_back("no gyro, so the heading comes from the GPS track alone");
+  report["sensors"] = others;
   if (!setup.first_fix)
     notes.push_back("the capture has no GPS fix: the rig is taken to stand where it started, heading east");
   report["scored"] = false;

@@ -46,10 +46,12 @@ nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, c
                                     const PipelineConfig& config, const std::filesystem::path& out,
                                     const sim::World* world, const eval::EvaluationOptions& scoring);
 
-// A real capture alone (lidar and GPS from its packets; no camera, no gyro, unscored) into out,
-// replaced whole (with force) once complete.
+// A real capture (lidar and GPS from its packets), with the camera images and gyro samples of a
+// sensor folder (rig/sensor_folder.hpp) when `sensors` names one, else alone (no camera, no gyro),
+// unscored, into out, replaced whole (with force) once complete.
 nlohmann::json reconstructCapture(const LidarChoice& lidar, const PipelineConfig& config,
-                                  const std::filesystem::path& out, bool force, const eval::EvaluationOptions& scoring);
+                                  const std::filesystem::path& out, bool force, const eval::EvaluationOptions& scoring,
+                                  const std::filesystem::path& sensors = {});
 
 // Simulates and reconstructs a generated scene of `type` and `seed` into out (the scene in
 // out/scene), or with a non-empty scene_file that scene as it is (not copied: its files must stay

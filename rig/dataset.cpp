@@ -134,6 +134,18 @@ std::vector<T> window(const std::vector<T>& all, double start, double end) {
 
 }  // namespace
 
+std::vector<std::vector<double>> readSensorStream(const fs::path& path, std::size_t columns,
+                                                  const std::function<std::string(const std::vector<double>&)>& check) {
+  return readStream(
+      path, columns, check ? check : [](const std::vector<double>&) { return std::string(); });
+}
+
+cv::Mat readRgbImage(const fs::path& path) {
+  cv::Mat rgb;
+  cv::cvtColor(readImage(path, cv::IMREAD_COLOR, CV_8UC3), rgb, cv::COLOR_BGR2RGB);
+  return rgb;
+}
+
 std::string calibrationToJson(const RigCalibration& c) {
   json j;
   json cameras = json::array();

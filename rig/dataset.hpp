@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -85,6 +86,15 @@ class DatasetSource : public SensorSource {
 // naming `origin` for a malformed calibration (see validateCameras).
 std::string calibrationToJson(const RigCalibration& calibration);
 RigCalibration calibrationFromJson(const std::string& text, const std::string& origin);
+
+// The rows of a CSV sensor stream after its header line: `columns` numbers each, every value
+// finite, times (the first column) increasing, and what `check` says of each row (empty: fine).
+// Throws io::InputError naming the file and line.
+std::vector<std::vector<double>> readSensorStream(
+    const std::filesystem::path& path, std::size_t columns,
+    const std::function<std::string(const std::vector<double>&)>& check = {});
+// An 8-bit colour image file, RGB order; throws io::InputError naming the file if it is not one.
+cv::Mat readRgbImage(const std::filesystem::path& path);
 
 // Throws io::InputError naming `origin` and the camera for a camera without a name or with one that
 // cannot name a folder, a duplicate name, or intrinsics or an extrinsic that are not positive and finite.

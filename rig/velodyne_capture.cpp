@@ -184,11 +184,16 @@ CaptureScan scanCapture(const fs::path& path, const CaptureOptions& options, con
 
 // ---------------------------------------------------------------------------------------------
 
-CaptureSource::CaptureSource(const fs::path& path, const CaptureOptions& options, double mast_height)
-    : setup_(setupCapture(path, options)) {
-  calibration_.vehicle_from_lidar = Pose::Identity();
-  calibration_.vehicle_from_lidar.translation() = Vector3(0, 0, mast_height);
-  calibration_.vehicle_from_gps = calibration_.vehicle_from_lidar;
+CaptureSource::CaptureSource(const fs::path& path, const CaptureOptions& options, double mast_height,
+                             std::shared_ptr<const SensorFolder> sensors)
+    : setup_(setupCapture(path, options)), sensors_(std::move(sensors)) {
+  if (sensors_) {
+    calibration_ = sensors_->calibration();
+  } else {
+    calibration_.vehicle_from_lidar = Pose::Identity();
+    calibration_.vehicle_from_lidar.translation() = Vector3(0, 0, mast_height);
+    calibration_.vehicle_from_gps = calibration_.vehicle_from_lidar;
+  }
   if (setup_.first_fix) {
     calibration_.origin.latitude_deg = setup_.first_fix->latitude_deg;
     calibration_.origin.longitude_deg = setup_.first_fix->longitude_deg;
@@ -213,6 +218,8 @@ std::optional<RigFrame> CaptureSource::next() {
   auto it = std::find_if(pending_.begin(), pending_.end(), [&](const GpsFix& g) { return g.time >= sweep->end_time; });
   s.gps.assign(pending_.begin(), it);
   pending_.erase(pending_.begin(), it);
+  if (sensors_) sensors_->fill(s, last_end_, sweep->end_time);
+  last_end_ = sweep->end_time;
   s.sweep = std::move(*sweep);
   return frame;
 }

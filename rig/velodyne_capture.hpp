@@ -3,11 +3,14 @@
 // position packets, its time base), the laser table that fits it, and a sensor source that runs
 // the pipeline from it with no simulated part.
 
+#include "rig/sensor_folder.hpp"
 #include "rig/sensor_source.hpp"
 #include "rig/velodyne_source.hpp"
 
 #include <filesystem>
 #include <functional>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -76,13 +79,17 @@ using SweepCallback = std::function<void(const LidarSweep&, const SweepSummary&)
 CaptureScan scanCapture(const std::filesystem::path& path, const CaptureOptions& options,
                         const SweepCallback& on_sweep = {});
 
-// The pipeline's input from a capture alone: lidar sweeps, GPS fixes from the position packets,
-// no camera, no gyro. The vehicle frame has the lidar mast_height above its origin and the GPS
-// antenna at the lidar (a Velodyne's GPS input carries no lever arm); the world origin is the
-// first fix (0, 0 without one: the pipeline then keeps the rig where it stands, heading east).
+// The pipeline's input from a capture: lidar sweeps and GPS fixes from the position packets. Alone,
+// no camera and no gyro: the vehicle frame has the lidar mast_height above its origin and the GPS
+// antenna at the lidar (a Velodyne's GPS input carries no lever arm). With a sensor folder, its
+// calibration places the lidar, the antenna and the cameras (mast_height is not used), and each
+// sweep carries the folder's images and gyro samples timed in (the previous sweep's end, its end].
+// The world origin is the first fix (0, 0 without one: the pipeline then keeps the rig where it
+// stands, heading east).
 class CaptureSource : public SensorSource {
  public:
-  CaptureSource(const std::filesystem::path& path, const CaptureOptions& options, double mast_height);
+  CaptureSource(const std::filesystem::path& path, const CaptureOptions& options, double mast_height,
+                std::shared_ptr<const SensorFolder> sensors = nullptr);
 
   const RigCalibration& calibration() const override { return calibration_; }
   const LaserCalibration& lasers() const override { return lidar_->calibration(); }
@@ -96,7 +103,9 @@ class CaptureSource : public SensorSource {
   CaptureSetup setup_;
   RigCalibration calibration_;
   std::unique_ptr<VelodyneLidar> lidar_;
+  std::shared_ptr<const SensorFolder> sensors_;
   std::vector<GpsFix> pending_;
+  double last_end_ = -std::numeric_limits<double>::infinity();  // the previous sweep's end [s]
   int index_ = 0;
 };
 

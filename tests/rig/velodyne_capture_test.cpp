@@ -394,6 +394,11 @@ TEST(VelodyneCaptureTest, LidarCommandsFailLoudlyAndLeaveOutputsAlone) {
   fails("lidar convert --pcap " + cut + " --out " + out.string() + " --force --strict", "cut off");
   fails("lidar convert --pcap " + kSample.string() + " --out " + out.string(), "exists and is not empty");
   fails("lidar inspect " + cut + " --strict", "cut off");
+  // a capture that is not there: the error alone, no summary of an empty capture
+  fails("lidar inspect " + (dir / "missing.pcap").string(), "no such capture file");
+  test::sh(cli + " lidar inspect " + (dir / "missing.pcap").string() + " > " + (dir / "stdout.txt").string() +
+           " 2> /dev/null");
+  EXPECT_EQ(io::readFile(dir / "stdout.txt"), "");
   fails("reconstruct --lidar pcap:" + (dir / "pos.pcap").string() + " --out " + out.string() + " --force",
         "no lidar data packet");
   fails("reconstruct --lidar pcap:" + cut + " --strict --out " + out.string() + " --force", "cut off");
