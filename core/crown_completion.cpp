@@ -222,6 +222,10 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       // first one bounded on both sides
       widest = 0, widest_left = 0, widest_row = top, half = 0;
       int prev_left = column(i, top), prev_right = prev_left, bounded = 0;
+      // how far each end moved out at the row before: a crown's outline widens less and less down
+      // to its widest row (steeply near its top), so only an end that moves out by more than `jump`
+      // and by more than it did at the row before (2 px of slack) is something behind joining it
+      int grew_left = 0, grew_right = 0;
       for (int row = top; row <= bottom; ++row) {
         const int u = column(i, row);
         if (!inside(u)) break;
@@ -233,7 +237,11 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
           break;
         }
         const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
-        if (bounded >= 2 && (prev_left - left > jump || right - prev_right > jump)) break;
+        const int out_left = prev_left - left, out_right = right - prev_right;
+        if (bounded >= 2 &&
+            ((out_left > jump && out_left > grew_left + 2) || (out_right > jump && out_right > grew_right + 2)))
+          break;
+        grew_left = out_left, grew_right = out_right;
         if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
         half = std::max(half, std::min(u - left, right - u));
         prev_left = left, prev_right = right;

@@ -8,9 +8,11 @@
 // crown's top (unless another sensed object may own it: the clear-line test of boundary estimation,
 // with the foliage cue only other trunks), and the largest distance from the column to the nearer
 // end of the crown's run of pixels around it, row by row while the run ends in non-crown pixels on
-// both sides, is the crown's radius at the trunk's depth. Where the run jumps outwards (another
-// crown joining it), another trunk stands under the run nearer its centre, or the widest run is
-// centred away from the column, the crown is another tree's; the frame gives no sample. The sky cue
+// both sides, is the crown's radius at the trunk's depth. The rows end where the run jumps outwards
+// (an end moving out by more than 3 px and by more than it moved at the row before: an outline
+// widens less and less down to its widest row, so that is another crown joining it). Where another
+// trunk stands under the run nearer its centre, or the widest run is centred away from the column,
+// the crown is another tree's; the frame gives no sample. The sky cue
 // measures only crowns against the sky; the foliage cue also those before facades. At the end of
 // the run, a tree with enough samples raises the ground vertices within its crown radius to a
 // spherical cap of that radius whose top is the crown's top height (the median of the lowest group of

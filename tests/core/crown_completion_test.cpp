@@ -196,6 +196,40 @@ TEST(CrownCompletionTest, ACrownAgainstTheSkyRaisesTheGroundUnderItToASphericalC
   EXPECT_NEAR(tree.at(0, 100).height(), 11.0, 0.15);
 }
 
+// A crown 6 m in radius topped at 16 m, 20 m from the camera (95 px): its outline widens by more
+// than 3 px a row below its top, as the outline of every large near crown does, yet it is one crown;
+// the ground 4 m from the trunk is raised to its cap (with only the first rows' widening, its
+// radius was taken as 0.9 m and the ground there stayed ground).
+TEST(CrownCompletionTest, ALargeNearCrownIsMeasuredToItsFullRadius) {
+  Tree tree;
+  cv::Mat rgb(tree.k.height, tree.k.width, CV_8UC3, cv::Scalar(120, 170, 235));
+  const Pose camera_from_world = tree.pose.inverse();
+  const int horizon = static_cast<int>(tree.k.cy);
+  cv::rectangle(rgb, cv::Rect(0, horizon, tree.k.width, tree.k.height - horizon), cv::Scalar(90, 110, 60), cv::FILLED);
+  const auto base = project(tree.k, camera_from_world * Point3(0.1, 20.1, 0.0));
+  const auto centre = project(tree.k, camera_from_world * Point3(0.1, 20.1, 10.0));
+  ASSERT_TRUE(base && centre);
+  cv::rectangle(rgb, cv::Point(static_cast<int>(base->x()) - 2, static_cast<int>(centre->y())),
+                cv::Point(static_cast<int>(base->x()) + 2, static_cast<int>(base->y())), cv::Scalar(90, 60, 30),
+                cv::FILLED);
+  const double radius_px = tree.k.fx * std::asin(6.0 / 20.0);
+  cv::circle(rgb, cv::Point(static_cast<int>(std::lround(centre->x())), static_cast<int>(std::lround(centre->y()))),
+             static_cast<int>(std::lround(radius_px)), cv::Scalar(40, 110, 30), cv::FILLED);
+  ASSERT_GT(centre->y() - radius_px, 0.0);  // the whole crown in view
+  CrownSampler sampler;
+  CrownConfig cfg;
+  cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+  for (int frame = 0; frame < 3; ++frame)
+    ASSERT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+  EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+  ASSERT_EQ(sampler.records().size(), 1u);
+  EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+  EXPECT_NEAR(tree.at(1, 100).height(), 16.0, 0.3);
+  // 4 m east and 4 m north of the trunk: 16 - 6 + sqrt(36 - 16)
+  EXPECT_NEAR(tree.at(20, 100).height(), 10.0 + std::sqrt(20.0), 0.5);
+  EXPECT_NEAR(tree.at(0, 120).height(), 10.0 + std::sqrt(20.0), 0.5);
+}
+
 // Foliage above the crown in its column (a taller crown behind it in some frames) lifts a sample's
 // top, never lowers it: the lowest group of samples that agree, with enough of them seen from far
 // enough apart, gives the crown. Shifting the crown up by 25 px in the image stands for such frames.
