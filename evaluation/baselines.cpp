@@ -237,8 +237,10 @@ class ScatteredOpening {
       }
       level0[c] = px;
     }
-    // sparse table along rows: level j holds the extreme of 2^j cells from each cell on
-    for (std::size_t span = 2; span <= nx_; span *= 2) {
+    // sparse table along rows: level j holds the extreme of 2^j cells from each cell on, up to the
+    // widest interior a box can have
+    const std::size_t widest = std::min(nx_, static_cast<std::size_t>(std::ceil(2.0 * half_ / cell_)) + 2);
+    for (std::size_t span = 2; span <= widest; span *= 2) {
       const std::vector<float>& below = table_.back();
       std::vector<float> level(cells, none);
       for (std::size_t r = 0; r < ny_; ++r) {
