@@ -6,6 +6,7 @@
 #include "core/voxel_map.hpp"
 #include "scenes/scene_truth.hpp"
 #include "sim/world.hpp"
+#include "tests/cli_support.hpp"
 #include "tests/core/core_test_support.hpp"
 #include "tests/temp_dir.hpp"
 
@@ -18,12 +19,6 @@
 #include <string>
 
 namespace terrain::test {
-
-// For tests that drive the command line: the terrain executable, the committed urban scene, and a
-// shell command's exit status as std::system returns it.
-inline const std::string kCli = TERRAIN_CLI;
-inline const std::string kUrbanScene = std::string(TERRAIN_SOURCE_DIR) + "/scenes/library/urban_1.xml";
-inline int sh(const std::string& command) { return std::system(command.c_str()); }
 
 // A flat plane named "ground", one box geom (class building) named `name` with its centre and half
 // sizes [m], and the robot body with its camera, as generated scenes have them; with sky, a

@@ -1,7 +1,7 @@
 #include "rig/dataset.hpp"
 
 #include "rig/file_io.hpp"
-#include "tests/test_support.hpp"
+#include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,7 +1,5 @@
 #include "rig/file_io.hpp"
 
-#include "tests/test_support.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdint>

@@ -1,7 +1,7 @@
 #include "rig/pcd.hpp"
 
 #include "rig/file_io.hpp"
-#include "tests/test_support.hpp"
+#include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 #include <pcl/PCLPointCloud2.h>

@@ -3,7 +3,8 @@
 #include "rig/dataset.hpp"
 #include "rig/file_io.hpp"
 #include "rig/velodyne_capture.hpp"
-#include "tests/test_support.hpp"
+#include "tests/cli_support.hpp"
+#include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>

@@ -3,7 +3,8 @@
 #include "rig/file_io.hpp"
 #include "rig/pcap_file.hpp"
 #include "rig/velodyne_position.hpp"
-#include "tests/test_support.hpp"
+#include "tests/cli_support.hpp"
+#include "tests/temp_dir.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
