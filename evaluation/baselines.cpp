@@ -217,7 +217,7 @@ class ScatteredOpening {
   void extreme(const std::vector<float>& value, bool larger, std::vector<float>& out) {
     const std::size_t n = value.size(), cells = nx_ * ny_;
     const float none = larger ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity();
-    const auto pick = [larger](float a, float b) { return larger ? std::max(a, b) : std::min(a, b); };
+    const auto pick = [larger](float a, float b) { return ScatteredOpening::pick(larger, a, b); };
     // prefix and suffix extremes within each cell, along x and along y
     pre_x_.resize(n), suf_x_.resize(n), pre_y_.resize(n), suf_y_.resize(n);
     table_.assign(1, std::vector<float>(cells, none));
@@ -254,17 +254,17 @@ class ScatteredOpening {
   }
 
  private:
-  std::size_t cellX(float v) const {
-    const double c = std::floor((static_cast<double>(v) - x0_) / cell_);
-    return c <= 0 ? 0 : std::min(nx_ - 1, static_cast<std::size_t>(c));
+  // the cell index of coordinate v along an axis starting at `origin` with n cells
+  std::size_t cellOf(float v, double origin, std::size_t n) const {
+    const double c = std::floor((static_cast<double>(v) - origin) / cell_);
+    return c <= 0 ? 0 : std::min(n - 1, static_cast<std::size_t>(c));
   }
-  std::size_t cellY(float v) const {
-    const double c = std::floor((static_cast<double>(v) - y0_) / cell_);
-    return c <= 0 ? 0 : std::min(ny_ - 1, static_cast<std::size_t>(c));
-  }
+  std::size_t cellX(float v) const { return cellOf(v, x0_, nx_); }
+  std::size_t cellY(float v) const { return cellOf(v, y0_, ny_); }
+  static float pick(bool larger, float a, float b) { return larger ? std::max(a, b) : std::min(a, b); }
 
   float query(std::size_t i, const std::vector<float>& value, bool larger, float none) const {
-    const auto pick = [larger](float a, float b) { return larger ? std::max(a, b) : std::min(a, b); };
+    const auto pick = [larger](float a, float b) { return ScatteredOpening::pick(larger, a, b); };
     // PCL's box, in float
     const float ax = x_[i] - half_, bx = x_[i] + half_, ay = y_[i] - half_, by = y_[i] + half_;
     const std::size_t cx0 = cellX(ax), cx1 = cellX(bx), cy0 = cellY(ay), cy1 = cellY(by);

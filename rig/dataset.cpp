@@ -71,6 +71,21 @@ cv::Mat readImage(const fs::path& path, int flags, int expected_type) {
   return img;
 }
 
+}  // namespace
+
+double parseCsvNumber(const std::string& cell, const std::string& where) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(cell, &used);
+    if (used != cell.size()) throw std::invalid_argument(cell);
+    return v;
+  } catch (const std::exception&) {
+    throw io::InputError(where + "'" + cell + "' is not a number");
+  }
+}
+
+namespace {
+
 // splits CSV text into rows of numbers after a header line; names file and line on error
 std::vector<std::vector<double>> readCsv(const fs::path& path, std::size_t columns, std::vector<int>* lines = nullptr) {
   std::istringstream in(io::readFile(path));
@@ -84,15 +99,8 @@ std::vector<std::vector<double>> readCsv(const fs::path& path, std::size_t colum
     std::vector<double> row;
     std::istringstream cells(line);
     std::string cell;
-    while (std::getline(cells, cell, ',')) {
-      try {
-        std::size_t used = 0;
-        row.push_back(std::stod(cell, &used));
-        if (used != cell.size()) throw std::invalid_argument(cell);
-      } catch (const std::exception&) {
-        throw io::InputError(path.string() + ":" + std::to_string(line_no) + ": '" + cell + "' is not a number");
-      }
-    }
+    while (std::getline(cells, cell, ','))
+      row.push_back(parseCsvNumber(cell, path.string() + ":" + std::to_string(line_no) + ": "));
     if (row.size() != columns) {
       throw io::InputError(path.string() + ":" + std::to_string(line_no) + ": expected " + std::to_string(columns) +
                            " columns, found " + std::to_string(row.size()));
@@ -466,11 +474,10 @@ std::optional<RigFrame> DatasetSource::next() {
       if (!fs::exists(image))
         throw io::InputError(image.string() + ": missing: frame " + std::to_string(row.index) +
                              " has a camera time but camera '" + calibration_.cameras[c].name + "' no image");
-      cv::Mat bgr = readImage(image, cv::IMREAD_COLOR, CV_8UC3);
       CameraImage img;
       img.camera = static_cast<int>(c);
       img.time = row.camera_time;
-      cv::cvtColor(bgr, img.rgb, cv::COLOR_BGR2RGB);
+      img.rgb = readRgbImage(image);
       s.images.push_back(std::move(img));
     }
   }

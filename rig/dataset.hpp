@@ -87,6 +87,8 @@ class DatasetSource : public SensorSource {
 std::string calibrationToJson(const RigCalibration& calibration);
 RigCalibration calibrationFromJson(const std::string& text, const std::string& origin);
 
+// A CSV cell as a number, the whole cell; throws io::InputError "<where>'<cell>' is not a number".
+double parseCsvNumber(const std::string& cell, const std::string& where);
 // The rows of a CSV sensor stream after its header line: `columns` numbers each, every value
 // finite, times (the first column) increasing, and what `check` says of each row (empty: fine).
 // Throws io::InputError naming the file and line.

@@ -26,14 +26,7 @@ std::vector<std::pair<double, fs::path>> readImageList(const fs::path& path) {
     const auto comma = line.find(',');
     if (comma == std::string::npos) throw io::InputError(where() + "expected time_s,file");
     const std::string cell = line.substr(0, comma), file = line.substr(comma + 1);
-    double time = 0;
-    try {
-      std::size_t used = 0;
-      time = std::stod(cell, &used);
-      if (used != cell.size()) throw std::invalid_argument(cell);
-    } catch (const std::exception&) {
-      throw io::InputError(where() + "'" + cell + "' is not a number");
-    }
+    const double time = parseCsvNumber(cell, where());
     if (!std::isfinite(time)) throw io::InputError(where() + "the time is not finite");
     if (!out.empty() && time <= out.back().first)
       throw io::InputError(where() + "time does not increase from the row before");
