@@ -71,10 +71,12 @@ Unary unary(double d, double delta, double range_margin, double alpha) {
 }
 
 // The peak of the histogram of heights above a plane over a set of tiles of a layout: the offset
-// that lifts the plane to the tiles' ground. One pass over the voxels: the residuals' range is
-// bounded beforehand from each tile's lowest and highest voxel and the plane at its corner columns.
+// that lifts the plane to the tiles' ground; with window > 0 the peak of the heights within
+// +-window [m] of the plane. One pass over the voxels: the residuals' range is bounded beforehand
+// from each tile's lowest and highest voxel and the plane at its corner columns.
 double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& tiles, std::size_t centre,
-                    const Plane& plane, double cell, double bin_size, int stride, PeakHistogram& histogram) {
+                    const Plane& plane, double cell, double bin_size, int stride, double window,
+                    PeakHistogram& histogram) {
   const int k = layout.k();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t t : tiles) {
@@ -85,6 +87,8 @@ double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& ti
     lo = std::min(lo, layout.lowest(t) - *std::max_element(corners, corners + 4));
     hi = std::max(hi, layout.highest(t) - *std::min_element(corners, corners + 4));
   }
+  // heights outside the window fall in the histogram's end bins, which the peak then leaves out
+  if (window > 0) lo = std::max(lo, -window), hi = std::min(hi, window);
   // every stride-th column each way, or every column if that leaves too few voxels
   for (const int s : {stride, 1}) {
     histogram.reset(lo, hi, bin_size);
@@ -101,7 +105,7 @@ double residualPeak(const TileLayout& layout, const std::vector<std::size_t>& ti
     }
     if (histogram.total() >= kMinHistogram) break;
   }
-  return histogram.peak();
+  return histogram.peak(window > 0);
 }
 
 // What a segmentation works in, kept from one call to the next so that its memory is reused.
@@ -142,9 +146,12 @@ void tilePlanes(Workspace& ws, std::size_t count, const GroundSegmentationConfig
         if (u >= 0) window.push_back(static_cast<std::size_t>(u)), points.push_back(&candidates[u]);
       }
     }
-    Plane plane = fitPlane(points);
+    // a plane on the ground's lower envelope is lifted within R(ground) only: the peak of a window
+    // may be a flat structure's, a ledge or a car park deck
+    Plane plane = fitPlane(points, cfg.lower_envelope);
     PeakHistogram histogram;
-    plane.c += residualPeak(layout, window, t, plane, cell, cfg.bin_size, std::max(1, cfg.histogram_stride), histogram);
+    plane.c += residualPeak(layout, window, t, plane, cell, cfg.bin_size, std::max(1, cfg.histogram_stride),
+                            cfg.lower_envelope ? cfg.range_margin : 0.0, histogram);
     ws.planes[t] = plane;
   });
 }

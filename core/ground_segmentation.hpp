@@ -67,6 +67,13 @@ struct GroundSegmentationConfig {
   // (rough, forest, mixed) and on rough and forest seed 9 three fewer trees at their height: the
   // trunks' lowest voxels join the ground. Off until the height recovery no longer pays for it.
   double depth_below = 0;
+  // The local histogram's tile planes follow the lower envelope of the columns' lowest voxels
+  // where that holds more of them than a symmetric least-squares fit (plane_fit.hpp), and the
+  // histogram's peak is sought within range_margin of the plane; false: symmetric least squares
+  // always, and the peak anywhere. Symmetric fits let a building's low ledge and bushes among
+  // sparse far ground lift the plane 0.5-2 m above the ground beside them. On the two real KITTI
+  // scans min-cut F1 0.978 -> 0.988 and 0.968 -> 0.976 (ICM 0.978 -> 0.988, 0.969 -> 0.977).
+  bool lower_envelope = true;
   double tile_size = 6.0;  // [m] local histogram tile edge
   int tile_radius = 1;     // tiles on each side whose voxels join a tile's histogram
   // [columns] of a tile's neighbours, its histogram takes the columns whose grid x and y are

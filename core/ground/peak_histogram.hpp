@@ -58,10 +58,11 @@ class PeakHistogram {
     return n;
   }
   // the refined peak [m]; NaN if empty. The lowest bin among equal peaks: ground lies under objects.
-  double peak() const {
+  // skip_ends: the peak is not in an end bin (those hold the heights outside [lo, hi])
+  double peak(bool skip_ends = false) const {
     int p = 0;
     std::int64_t best = -1;
-    for (int b = 0; b < bins_; ++b) {
+    for (int b = skip_ends ? 1 : 0; b < (skip_ends ? bins_ - 1 : bins_); ++b) {
       const std::int64_t c = count(b);
       if (c > best) best = c, p = b;
     }

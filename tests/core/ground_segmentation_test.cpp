@@ -235,6 +235,42 @@ TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
   EXPECT_EQ(floor_voxels, 400u);
 }
 
+// Flat ground (z = 0) beside a flat ledge 0.7 m high and 3 m wide, whose top the lidar sees over
+// a quarter of the map's columns, the ground under it not at all. A least-squares plane through the
+// columns' lowest voxels leans towards the ledge and lies more than the band above the ground
+// beside it; the plane on their lower envelope lies on the ground, and the histogram's peak is
+// sought within R(ground) of it, not at the ledge's top. So every ground voxel is ground and every
+// ledge voxel non-ground with ground.lower_envelope (the default); without it, ground beside the
+// ledge is lost.
+TEST(GroundSegmentationTest, ALowLedgeDoesNotLiftTheGroundPlane) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  const auto ledge = [](int x) { return x >= 15 && x < 30; };
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, ledge(x) ? 0.75 : 0.05);
+  }
+  map.insert(pts, 0);
+  GroundSegmentationConfig cfg;
+  ASSERT_TRUE(cfg.lower_envelope);  // the default
+  const SegmentationResult envelope = segmentGroundLabels(map, cfg);
+  cfg.lower_envelope = false;
+  const SegmentationResult symmetric = segmentGroundLabels(map, cfg);
+  std::size_t ground = 0, lost = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const VoxelIndex& v = map.voxels()[i].index;
+    if (ledge(v.x())) {
+      EXPECT_EQ(envelope.refined[i], 0) << v.transpose();
+      continue;
+    }
+    ++ground;
+    EXPECT_EQ(envelope.refined[i], 1) << v.transpose();
+    EXPECT_NEAR(envelope.ground_height[i], 0.05, 0.05) << v.transpose();
+    lost += symmetric.refined[i] == 0;
+  }
+  EXPECT_EQ(ground, 45u * 60u);
+  EXPECT_GT(lost, 100u);  // the symmetric fit loses ground beside the ledge
+}
+
 TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const int n = 14;
