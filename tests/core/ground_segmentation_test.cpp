@@ -199,7 +199,10 @@ TEST(GroundSegmentationTest, AWallSampledRingByRingIsAStack) {
 // ground (z = 0), so the ditch's floor lies 0.8 m below h1, outside the band of +-0.3 m. Being
 // the lowest voxels of their columns, below the plane, they are ground with ground.depth_below at
 // 2 m, non-ground without it (0, the default). A voxel 0.2 m above the floor, as low below the plane
-// but not the lowest of its column, stays non-ground.
+// but not the lowest of its column, stays non-ground. The floor holds 11 % of the columns' lowest
+// voxels, more than the lower envelope's lowest tenth: a plane on the envelope would lie on the
+// floor and leave the flat ground above the band, so this also checks that the plane fit keeps the
+// symmetric fit where that holds more of the voxels (it fails without that test).
 TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
   VoxelMap map(VoxelMapConfig{0.2});
   std::vector<Point3> pts;
