@@ -55,6 +55,7 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("ground.range_margin", c.ground.range_margin, openClosed(0, 20, "m"));
   v.number("ground.stack_height", c.ground.stack_height, offOr(10, "m"));
   v.number("ground.stack_gap", c.ground.stack_gap, closed(0, 5, "m"));
+  v.number("ground.step_height", c.ground.step_height, offOr(5, "m"));
   v.number("ground.depth_below", c.ground.depth_below, offOr(100, "m"));
   v.flag("ground.lower_envelope", c.ground.lower_envelope);
   v.number("ground.tile_size", c.ground.tile_size, closed(1, 1000, "m"));

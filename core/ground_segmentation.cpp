@@ -191,11 +191,28 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
     const std::int32_t stack_step = 1 + static_cast<std::int32_t>(std::floor(cfg.stack_gap / cell + 1e-6));
     const double depth_below = cfg.depth_below;
     const Plane plane = ws.planes[t];
+    // what the ground rises across one column on the tile's plane, added to step_height
+    const float step = static_cast<float>(cfg.step_height + cell * std::hypot(plane.a, plane.b));
     const auto& tile = layout.tiles()[t];
     layout.forEachColumn(t, [&](int lx, int ly, std::uint32_t b, std::uint32_t e) {
       const int x = tile.tx * k + lx, y = tile.ty * k + ly;
       const double ground = plane.at((x + 0.5) * cell, (y + 0.5) * cell);
       const bool on_edge = lx == 0 || ly == 0 || lx == k - 1 || ly == k - 1;
+      // the ground's level here: the (lower) median of the ground tops of this column and the
+      // eight around it
+      float step_limit = std::numeric_limits<float>::infinity();
+      if (cfg.step_height > 0) {
+        float lows[9];
+        int n = 0;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const float l = layout.groundTop(x + dx, y + dy);
+            if (l < std::numeric_limits<float>::infinity()) lows[n++] = l;
+          }
+        }
+        std::nth_element(lows, lows + (n - 1) / 2, lows + n);
+        step_limit = lows[(n - 1) / 2] + step;
+      }
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];
         double d = h - ground;
@@ -212,6 +229,8 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
             }
           }
         }
+        // standing on the ground rather than being it: a step above the ground's level here
+        if (h > step_limit) u = {false, static_cast<float>(2 * alpha)};
         unary_ground[q] = u.ground, unary_nonground[q] = -u.ground;
         parity[q] = static_cast<std::uint8_t>((x + y + zs[q]) & 1);
         prev[3 * q] = prev[3 * q + 1] = prev[3 * q + 2] = GmrfProblem::kNone;

@@ -116,6 +116,18 @@ class TileLayout {
     for (int ly = ly0; ly < k_; ly += s) f(ly, lx0, col + ly * k_ + lx0);
   }
 
+  // the top of the ground in the column at grid cell (x, y) as far as its lowest voxels can hold
+  // it [m]: the height of the voxel right above the lowest, if there is one, else of the lowest;
+  // +inf if the column is empty or its tile is not in the layout
+  float groundTop(int x, int y) const {
+    const std::int64_t t = tileAt(floorDiv(x, k_), floorDiv(y, k_));
+    if (t < 0) return std::numeric_limits<float>::infinity();
+    const std::size_t c = static_cast<std::size_t>(floorMod(y, k_)) * k_ + static_cast<std::size_t>(floorMod(x, k_));
+    const std::uint32_t b = column(static_cast<std::size_t>(t), c), e = column(static_cast<std::size_t>(t), c + 1);
+    if (b == e) return std::numeric_limits<float>::infinity();
+    return b + 1 < e && z_[b + 1] == z_[b] + 1 ? height_[b + 1] : height_[b];
+  }
+
   // the height of the lowest voxel of each column of tile t, in row-major order (+inf where the
   // column is empty), into low[0 .. k*k - 1]
   void columnLows(std::size_t t, float* low) const {

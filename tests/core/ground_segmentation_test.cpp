@@ -274,6 +274,80 @@ TEST(GroundSegmentationTest, ALowLedgeDoesNotLiftTheGroundPlane) {
   EXPECT_GT(lost, 100u);  // the symmetric fit loses ground beside the ledge
 }
 
+// Flat ground (z = 0) and the side of a car seen from beside it: a column-wide row whose lowest
+// return lies 0.2 m up (the body above its shadow), with nothing sensed behind it. Inside the band and
+// with no stack above, they would be ground by the histogram and the GMRF alike; they stand a step
+// above the lowest voxels around them (most of which are ground), so with ground.step_height at
+// 0.1 m they are non-ground, and the ground around them stays ground.
+TEST(GroundSegmentationTest, AVoxelSteppingUpFromTheGroundIsNotGround) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  const auto side = [](int x, int y) { return x == 10 && y >= 0 && y < 20; };
+  const auto shadow = [](int x, int y) { return x > 10 && x < 20 && y >= 0 && y < 20; };
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      if (shadow(x, y)) continue;
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, side(x, y) ? 0.27 : 0.05);
+    }
+  }
+  map.insert(pts, 0);
+  for (const auto solver : {GroundSegmentationConfig::Solver::MinCut, GroundSegmentationConfig::Solver::Icm}) {
+    GroundSegmentationConfig cfg;
+    cfg.solver = solver;
+    cfg.step_height = 0.1;
+    const SegmentationResult with = segmentGroundLabels(map, cfg);
+    cfg.step_height = 0;
+    const SegmentationResult without = segmentGroundLabels(map, cfg);
+    std::size_t steps = 0;
+    for (std::size_t i = 0; i < map.size(); ++i) {
+      const VoxelIndex& v = map.voxels()[i].index;
+      if (side(v.x(), v.y())) {
+        ++steps;
+        EXPECT_EQ(with.rough[i], 0) << v.transpose();
+        EXPECT_EQ(with.refined[i], 0) << v.transpose();
+        EXPECT_EQ(without.refined[i], 1) << v.transpose();
+      } else {
+        EXPECT_EQ(with.refined[i], 1) << v.transpose();
+      }
+    }
+    EXPECT_EQ(steps, 20u);
+  }
+}
+
+// Ground two voxels thick is no step: ground rising 0.5 m per metre (27 deg), sampled four times
+// across each column, so that a column spans 0.1 m of height and many hold two voxels (the
+// tile's plane's rise across a column is allowed); and flat ground sensed 0.3 m thick (a map of
+// sweeps with pose error), every column holding two voxels whose means lie 0.28 m apart (each
+// column's ground top is the upper one). Every voxel is ground.
+TEST(GroundSegmentationTest, TwoVoxelThickGroundIsNoStep) {
+  for (const bool slope : {true, false}) {
+    SCOPED_TRACE(slope ? "slope" : "thick flat ground");
+    VoxelMap map(VoxelMapConfig{0.2});
+    std::vector<Point3> pts;
+    for (int i = -120; i < 120; ++i) {
+      for (int y = -30; y < 30; ++y) {
+        const double x = i * 0.05 + 0.025;
+        if (slope) {
+          pts.emplace_back(x, y * 0.2 + 0.1, 0.5 * x + 0.03);
+        } else {
+          pts.emplace_back(x, y * 0.2 + 0.1, i % 2 ? 0.05 : 0.33);
+        }
+      }
+    }
+    map.insert(pts, 0);
+    GroundSegmentationConfig cfg;
+    cfg.step_height = 0.1;
+    const SegmentationResult s = segmentGroundLabels(map, cfg);
+    std::size_t upper = 0;
+    for (std::size_t i = 0; i < map.size(); ++i) {
+      const VoxelIndex& v = map.voxels()[i].index;
+      EXPECT_EQ(s.refined[i], 1) << v.transpose();
+      upper += map.find(VoxelIndex(v.x(), v.y(), v.z() - 1)) >= 0;
+    }
+    EXPECT_GT(upper, slope ? 1000u : 3000u);  // two-voxel columns are common
+  }
+}
+
 TEST(GroundSegmentationTest, MinCutIsExactAndNeverWorseThanIcm) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const int n = 14;
