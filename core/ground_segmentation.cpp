@@ -202,16 +202,16 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
       // eight around it
       float step_limit = std::numeric_limits<float>::infinity();
       if (cfg.step_height > 0) {
-        float lows[9];
+        float tops[9];
         int n = 0;
         for (int dy = -1; dy <= 1; ++dy) {
           for (int dx = -1; dx <= 1; ++dx) {
-            const float l = layout.groundTop(x + dx, y + dy);
-            if (l < std::numeric_limits<float>::infinity()) lows[n++] = l;
+            const float top = layout.groundTop(x + dx, y + dy);
+            if (top < std::numeric_limits<float>::infinity()) tops[n++] = top;
           }
         }
-        std::nth_element(lows, lows + (n - 1) / 2, lows + n);
-        step_limit = lows[(n - 1) / 2] + step;
+        std::nth_element(tops, tops + (n - 1) / 2, tops + n);
+        step_limit = tops[(n - 1) / 2] + step;
       }
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace terrain {
 namespace {
@@ -238,6 +239,22 @@ TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
   EXPECT_EQ(floor_voxels, 400u);
 }
 
+// A map of 0.2 m voxels holding one return per column of a 60 x 60 grid of 0.2 m columns around
+// the origin, at height z(x, y) of the column's grid index (none where z is NaN).
+template <class Z>
+VoxelMap oneReturnPerColumn(Z&& z) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      const double h = z(x, y);
+      if (!std::isnan(h)) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, h);
+    }
+  }
+  map.insert(pts, 0);
+  return map;
+}
+
 // Flat ground (z = 0) beside a flat ledge 0.7 m high and 3 m wide, whose top the lidar sees over
 // a quarter of the map's columns, the ground under it not at all. A least-squares plane through the
 // columns' lowest voxels leans towards the ledge and lies more than the band above the ground
@@ -246,13 +263,8 @@ TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
 // ledge voxel non-ground with ground.lower_envelope (the default); without it, ground beside the
 // ledge is lost.
 TEST(GroundSegmentationTest, ALowLedgeDoesNotLiftTheGroundPlane) {
-  VoxelMap map(VoxelMapConfig{0.2});
-  std::vector<Point3> pts;
   const auto ledge = [](int x) { return x >= 15 && x < 30; };
-  for (int x = -30; x < 30; ++x) {
-    for (int y = -30; y < 30; ++y) pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, ledge(x) ? 0.75 : 0.05);
-  }
-  map.insert(pts, 0);
+  const VoxelMap map = oneReturnPerColumn([&](int x, int) { return ledge(x) ? 0.75 : 0.05; });
   GroundSegmentationConfig cfg;
   ASSERT_TRUE(cfg.lower_envelope);  // the default
   const SegmentationResult envelope = segmentGroundLabels(map, cfg);
@@ -277,20 +289,14 @@ TEST(GroundSegmentationTest, ALowLedgeDoesNotLiftTheGroundPlane) {
 // Flat ground (z = 0) and the side of a car seen from beside it: a column-wide row whose lowest
 // return lies 0.2 m up (the body above its shadow), with nothing sensed behind it. Inside the band and
 // with no stack above, they would be ground by the histogram and the GMRF alike; they stand a step
-// above the lowest voxels around them (most of which are ground), so with ground.step_height at
+// above the ground tops of the columns around them (most of which are ground), so with ground.step_height at
 // 0.1 m they are non-ground, and the ground around them stays ground.
 TEST(GroundSegmentationTest, AVoxelSteppingUpFromTheGroundIsNotGround) {
-  VoxelMap map(VoxelMapConfig{0.2});
-  std::vector<Point3> pts;
   const auto side = [](int x, int y) { return x == 10 && y >= 0 && y < 20; };
   const auto shadow = [](int x, int y) { return x > 10 && x < 20 && y >= 0 && y < 20; };
-  for (int x = -30; x < 30; ++x) {
-    for (int y = -30; y < 30; ++y) {
-      if (shadow(x, y)) continue;
-      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, side(x, y) ? 0.27 : 0.05);
-    }
-  }
-  map.insert(pts, 0);
+  const VoxelMap map = oneReturnPerColumn([&](int x, int y) {
+    return shadow(x, y) ? std::numeric_limits<double>::quiet_NaN() : side(x, y) ? 0.27 : 0.05;
+  });
   for (const auto solver : {GroundSegmentationConfig::Solver::MinCut, GroundSegmentationConfig::Solver::Icm}) {
     GroundSegmentationConfig cfg;
     cfg.solver = solver;
