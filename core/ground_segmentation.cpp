@@ -206,7 +206,7 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
         int n = 0;
         for (int dy = -1; dy <= 1; ++dy) {
           for (int dx = -1; dx <= 1; ++dx) {
-            const float top = layout.groundTop(x + dx, y + dy);
+            const float top = layout.groundTop(x + dx, y + dy, stack_height);
             if (top < std::numeric_limits<float>::infinity()) tops[n++] = top;
           }
         }
@@ -216,8 +216,9 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];
         double d = h - ground;
-        // the lowest voxel of its column, below the plane: nothing is seen under the ground
-        if (q == b && d < -delta && d >= -depth_below) d = 0;
+        // the lowest voxel of its column or the one right above it (ground is one or two voxels
+        // thick), below the plane: nothing is seen under the ground
+        if ((q == b || (q == b + 1 && zs[q] == zs[b] + 1)) && d < -delta && d >= -depth_below) d = 0;
         Unary u = unary(d, delta, range_margin, alpha);
         // the foot of something upright: a stack of the column's voxels (sorted upwards) rises
         // from it, starting right above it and with gaps of at most stack_gap further up

@@ -61,24 +61,24 @@ struct GroundSegmentationConfig {
   // plane rises across one column, is not ground: rough class non-ground, and the single-site term
   // of a voxel outside R(ground). The level is the lower median, over its column and the eight
   // around it, of each column's ground top: the voxel right above the column's lowest if there is
-  // one (ground is one or two voxels thick), else the lowest. The side of a car, a kerb's top or a
-  // wall's low rows step up from the ground their neighbours share. 0: off, the default. At 0.1 m,
-  // on the two real KITTI scans min-cut F1 0.988 -> 0.989 and 0.976 -> 0.980, and on 60-frame
-  // simulated runs (seeds 29 and 30) F1 within +-0.03 points; but on the 8-frame CI suite, whose
-  // maps carry degrees of pitch error, slope 0.985 -> 0.945 and mixed 0.978 -> 0.943 (the ground
-  // there is thicker than two voxels or tilted against the tile's plane), and on 60 frames the
-  // object-cell error 8.44 -> 8.57 m (voxels beside trunks' feet turn non-ground and join them).
+  // one (ground is one or two voxels thick), else the lowest, or higher up the unbroken stack on
+  // the lowest while within stack_height of it (thick ground from pose error). The side of a car, a
+  // kerb's top or a wall's low rows step up from the ground their neighbours share. 0: off, the
+  // default. At 0.1 m, on the two real KITTI scans min-cut F1 0.988 -> 0.989 and 0.975 -> 0.979, on
+  // 60-frame simulated runs (seeds 29-32) 99.44 -> 99.45 %, but the object-cell error 8.95 ->
+  // 9.03 m and trees at their height 584 -> 576: voxels beside trunks' feet turn non-ground and
+  // join them, too wide then for trunks.
   double step_height = 0;
-  // [m] the lowest voxel of a column lying below h1 by more than delta but no more than this is in
-  // G1, with the single-site term of a voxel at h1: the lidar sees nothing under the ground, so
-  // the lowest return of a column below the fitted plane is ground where the plane does not
-  // follow it (a dip, a ditch, a road below its kerbs). 0: off, the default. At 2 m, on the two
-  // real KITTI scans ICM F1 0.978 -> 0.983 and 0.969 -> 0.972 (missed ground 2,243 -> 1,339 and
-  // 1,701 -> 1,049 points), and on 60-frame simulated runs (seed 9) rough 93.2 -> 95.9 %, forest
-  // 98.1 -> 98.8 %, slope 99.5 -> 99.7 %; but on the 8-frame CI suite 7 more trees stood too high
-  // (rough, forest, mixed) and on rough and forest seed 9 three fewer trees at their height: the
-  // trunks' lowest voxels join the ground. Off until the height recovery no longer pays for it.
-  double depth_below = 0;
+  // [m] the lowest voxel of a column, and the one right above it (ground is one or two voxels
+  // thick), lying below h1 by more than delta but no more than this are in G1, with the single-site
+  // term of a voxel at h1: the lidar sees nothing under the ground, so the lowest returns of a
+  // column below the fitted plane are ground where the plane does not follow it (a dip, a ditch, a
+  // road below its kerbs, the path cut into rough ground). 0: off. At 1 m, on 60-frame simulated
+  // runs of every terrain type (seeds 29-32) ICM F1 98.15 -> 99.12 % and 98.35 -> 99.06 % (rough
+  // 92.35 -> 97.48 and 95.13 -> 98.50), object-cell MAE 8.44 -> 8.35 and 9.63 -> 9.55 m, terrain
+  // cells raised by mistake 229.8 -> 216.8 and 640.9 -> 612.9 a run; on the two real KITTI scans
+  // min-cut F1 0.988 -> 0.988 and 0.976 -> 0.975.
+  double depth_below = 1.0;
   // The local histogram's tile planes follow the lower envelope of the columns' lowest voxels
   // where that holds more of them than a symmetric least-squares fit (plane_fit.hpp), and the
   // histogram's peak is sought within range_margin of the plane; false: symmetric least squares

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -199,11 +200,12 @@ TEST(GroundSegmentationTest, AWallSampledRingByRingIsAStack) {
 // Flat ground with a ditch 0.8 m deep and 2 m wide: the plane and the histogram follow the flat
 // ground (z = 0), so the ditch's floor lies 0.8 m below h1, outside the band of +-0.3 m. Being
 // the lowest voxels of their columns, below the plane, they are ground with ground.depth_below at
-// 2 m, non-ground without it (0, the default). A voxel 0.2 m above the floor, as low below the plane
-// but not the lowest of its column, stays non-ground. The floor holds 11 % of the columns' lowest
-// voxels, more than the lower envelope's lowest tenth: a plane on the envelope would lie on the
-// floor and leave the flat ground above the band, so this also checks that the plane fit keeps the
-// symmetric fit where that holds more of the voxels (it fails without that test).
+// 2 m, non-ground without it (0). Ground is one or two voxels thick: a voxel right above the
+// floor, 0.2 m up, is ground with it as well, and non-ground without. The floor holds 11 % of the
+// columns' lowest voxels, more than the lower envelope's lowest tenth: a plane on the envelope
+// would lie on the floor and leave the flat ground above the band, so this also checks that the
+// plane fit keeps the symmetric fit where that holds more of the voxels (it fails without that
+// test).
 TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
   VoxelMap map(VoxelMapConfig{0.2});
   std::vector<Point3> pts;
@@ -230,8 +232,10 @@ TEST(GroundSegmentationTest, TheLowestVoxelBelowThePlaneIsGround) {
       EXPECT_EQ(with.rough[i], 1) << v.transpose();
       EXPECT_EQ(with.refined[i], 1) << v.transpose();
       EXPECT_EQ(without.rough[i], 0) << v.transpose();
-    } else if (in_ditch) {
-      EXPECT_EQ(with.refined[i], 0) << v.transpose();  // the voxel above the floor
+    } else if (in_ditch) {  // the voxel right above the floor
+      EXPECT_EQ(with.rough[i], 1) << v.transpose();
+      EXPECT_EQ(with.refined[i], 1) << v.transpose();
+      EXPECT_EQ(without.refined[i], 0) << v.transpose();
     } else {
       EXPECT_EQ(with.refined[i], 1) << v.transpose();
     }
@@ -261,12 +265,14 @@ VoxelMap oneReturnPerColumn(Z&& z) {
 // beside it; the plane on their lower envelope lies on the ground, and the histogram's peak is
 // sought within R(ground) of it, not at the ledge's top. So every ground voxel is ground and every
 // ledge voxel non-ground with ground.lower_envelope (the default); without it, ground beside the
-// ledge is lost.
+// ledge is lost (with ground.depth_below off, which would take it back as the lowest voxels below
+// the plane).
 TEST(GroundSegmentationTest, ALowLedgeDoesNotLiftTheGroundPlane) {
   const auto ledge = [](int x) { return x >= 15 && x < 30; };
   const VoxelMap map = oneReturnPerColumn([&](int x, int) { return ledge(x) ? 0.75 : 0.05; });
   GroundSegmentationConfig cfg;
   ASSERT_TRUE(cfg.lower_envelope);  // the default
+  cfg.depth_below = 0;
   const SegmentationResult envelope = segmentGroundLabels(map, cfg);
   cfg.lower_envelope = false;
   const SegmentationResult symmetric = segmentGroundLabels(map, cfg);
@@ -320,23 +326,29 @@ TEST(GroundSegmentationTest, AVoxelSteppingUpFromTheGroundIsNotGround) {
   }
 }
 
-// Ground two voxels thick is no step: ground rising 0.5 m per metre (27 deg), sampled four times
-// across each column, so that a column spans 0.1 m of height and many hold two voxels (the
-// tile's plane's rise across a column is allowed); and flat ground sensed 0.3 m thick (a map of
-// sweeps with pose error), every column holding two voxels whose means lie 0.28 m apart (each
-// column's ground top is the upper one). Every voxel is ground.
-TEST(GroundSegmentationTest, TwoVoxelThickGroundIsNoStep) {
-  for (const bool slope : {true, false}) {
-    SCOPED_TRACE(slope ? "slope" : "thick flat ground");
+// Thick ground is no step: ground rising 0.5 m per metre (27 deg), sampled four times across each
+// column, so that a column spans 0.1 m of height and many hold two voxels (the tile's plane's rise
+// across a column is allowed); flat ground sensed 0.3 m thick (a map of sweeps with pose error),
+// every column holding two voxels whose means lie 0.28 m apart (each column's ground top is the
+// upper one); and flat ground sensed 0.36 m thick, every column holding three voxels (0.05, 0.25
+// and 0.41 m: an unbroken stack within the stack test's 0.4 m, so the ground top is the third; with
+// the voxel right above the lowest as the top, the third voxels stand 0.16 m above the level and
+// would be steps). Every voxel is ground.
+TEST(GroundSegmentationTest, ThickGroundIsNoStep) {
+  enum Case { Slope, TwoVoxels, ThreeVoxels };
+  for (const Case c : {Slope, TwoVoxels, ThreeVoxels}) {
+    SCOPED_TRACE(c == Slope ? "slope" : c == TwoVoxels ? "two voxels thick" : "three voxels thick");
     VoxelMap map(VoxelMapConfig{0.2});
     std::vector<Point3> pts;
     for (int i = -120; i < 120; ++i) {
       for (int y = -30; y < 30; ++y) {
         const double x = i * 0.05 + 0.025;
-        if (slope) {
+        if (c == Slope) {
           pts.emplace_back(x, y * 0.2 + 0.1, 0.5 * x + 0.03);
-        } else {
+        } else if (c == TwoVoxels) {
           pts.emplace_back(x, y * 0.2 + 0.1, i % 2 ? 0.05 : 0.33);
+        } else {
+          pts.emplace_back(x, y * 0.2 + 0.1, std::array<double, 3>{0.05, 0.25, 0.41}[(i + 120) % 3]);
         }
       }
     }
@@ -350,7 +362,7 @@ TEST(GroundSegmentationTest, TwoVoxelThickGroundIsNoStep) {
       EXPECT_EQ(s.refined[i], 1) << v.transpose();
       upper += map.find(VoxelIndex(v.x(), v.y(), v.z() - 1)) >= 0;
     }
-    EXPECT_GT(upper, slope ? 1000u : 3000u);  // two-voxel columns are common
+    EXPECT_GT(upper, c == Slope ? 1000u : 3000u);  // columns of several voxels are common
   }
 }
 
