@@ -57,6 +57,7 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("ground.stack_gap", c.ground.stack_gap, closed(0, 5, "m"));
   v.number("ground.step_height", c.ground.step_height, offOr(5, "m"));
   v.number("ground.depth_below", c.ground.depth_below, offOr(100, "m"));
+  v.number("ground.rise_above", c.ground.rise_above, offOr(100, "m"));
   v.flag("ground.lower_envelope", c.ground.lower_envelope);
   v.number("ground.tile_size", c.ground.tile_size, closed(1, 1000, "m"));
   v.integer("ground.tile_radius", c.ground.tile_radius, closed(0, 10));

@@ -58,6 +58,12 @@ using namespace ground;
 // a tile's histogram takes every histogram_stride-th column unless that leaves fewer voxels than this
 constexpr std::int64_t kMinHistogram = 256;
 
+// The single-site term for ground of a column's lowest returns above R(ground) but within
+// rise_above of h1, in units of alpha: a quarter of alpha, leaning to non-ground (a voxel outside
+// R(ground) and G1 has 2 alpha), so that a patch standing apart (a ledge, a car's roof) stays
+// non-ground and one that continues the ground around it through its neighbours becomes ground.
+constexpr double kRiseTerm = 0.25;
+
 // Eqs. 19-20 for a voxel d [m] above the ground height h1 at its column: its rough class (true: G1)
 // and its single-site term V1(f) + V1(h|f) for f = ground. That for non-ground is the negative.
 struct Unary {
@@ -189,7 +195,7 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
     const float stack_height = static_cast<float>(cfg.stack_height);
     // a stack's next voxel lies at most this many grid steps above the one below it
     const std::int32_t stack_step = 1 + static_cast<std::int32_t>(std::floor(cfg.stack_gap / cell + 1e-6));
-    const double depth_below = cfg.depth_below;
+    const double depth_below = cfg.depth_below, rise_above = cfg.rise_above;
     const Plane plane = ws.planes[t];
     // what the ground rises across one column on the tile's plane, added to step_height
     const float step = static_cast<float>(cfg.step_height + cell * std::hypot(plane.a, plane.b));
@@ -216,10 +222,14 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];
         double d = h - ground;
-        // the lowest voxel of its column or the one right above it (ground is one or two voxels
-        // thick), below the plane: nothing is seen under the ground
-        if ((q == b || (q == b + 1 && zs[q] == zs[b] + 1)) && d < -delta && d >= -depth_below) d = 0;
+        // the lowest voxel of its column or the one right above it: ground is one or two voxels thick
+        const bool lowest = q == b || (q == b + 1 && zs[q] == zs[b] + 1);
+        // below the plane: nothing is seen under the ground
+        if (lowest && d < -delta && d >= -depth_below) d = 0;
         Unary u = unary(d, delta, range_margin, alpha);
+        // the lowest returns of a column above R(ground), within rise_above of h1: a weak term, so
+        // that the neighbours decide whether they continue the ground around them
+        if (lowest && d > range_margin && d <= rise_above) u = {false, static_cast<float>(kRiseTerm * alpha)};
         // the foot of something upright: a stack of the column's voxels (sorted upwards) rises
         // from it, starting right above it and with gaps of at most stack_gap further up
         if (stack_height > 0) {

@@ -292,6 +292,44 @@ TEST(GroundSegmentationTest, ALowLedgeDoesNotLiftTheGroundPlane) {
   EXPECT_GT(lost, 100u);  // the symmetric fit loses ground beside the ledge
 }
 
+// Flat ground (z = 0) with a ridge along y: from column x = 7 the ground rises 0.1 m per 0.2 m
+// column to 0.7 m at x = 14 and falls back as steeply (a bank, a berm, the foot of a slope where
+// the tile's plane does not turn with it), sensed two returns thick (0.12 m apart, as in a map of
+// several sweeps), so that each column shares a voxel layer with the next. The ridge holds a
+// quarter of the columns: the plane and h1 lie on the flat ground, and the ridge's top voxels lie
+// outside R(ground) and G1 (without ground.rise_above, 0, they are non-ground). They lie within
+// ground.rise_above (1 m) of h1, and their weak terms let their links to the slopes on both sides
+// decide: every voxel is ground. A ledge with no slope up to it (above) stays non-ground with it;
+// a wide plateau on such a ridge would too (its weak terms outweigh the few links).
+TEST(GroundSegmentationTest, ARidgeThatContinuesTheGroundIsGround) {
+  VoxelMap map(VoxelMapConfig{0.2});
+  std::vector<Point3> pts;
+  const auto height = [](int x) { return 0.05 + std::max(0.0, 0.7 - 0.1 * std::abs(x - 14)); };
+  for (int x = -30; x < 30; ++x) {
+    for (int y = -30; y < 30; ++y) {
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, height(x));
+      pts.emplace_back(x * 0.2 + 0.1, y * 0.2 + 0.1, height(x) + 0.12);
+    }
+  }
+  map.insert(pts, 0);
+  GroundSegmentationConfig cfg;
+  ASSERT_EQ(cfg.rise_above, 1.0);  // the default
+  const SegmentationResult with = segmentGroundLabels(map, cfg);
+  cfg.rise_above = 0;
+  const SegmentationResult without = segmentGroundLabels(map, cfg);
+  std::size_t top = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const VoxelIndex& v = map.voxels()[i].index;
+    EXPECT_EQ(with.refined[i], 1) << v.transpose();
+    if (map.voxels()[i].height > with.ground_height[i] + cfg.range_margin) {
+      ++top;
+      EXPECT_EQ(with.rough[i], 0) << v.transpose();
+      EXPECT_EQ(without.refined[i], 0) << v.transpose();
+    }
+  }
+  EXPECT_GE(top, 3u * 60u);  // the ridge's top: three voxels or more in each row
+}
+
 // Flat ground (z = 0) and the side of a car seen from beside it: a column-wide row whose lowest
 // return lies 0.2 m up (the body above its shadow), with nothing sensed behind it. Inside the band and
 // with no stack above, they would be ground by the histogram and the GMRF alike; they stand a step
