@@ -219,11 +219,12 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
         std::nth_element(tops, tops + (n - 1) / 2, tops + n);
         step_limit = tops[(n - 1) / 2] + step;
       }
+      // the column's lowest voxel and the one right above it, if there is one
+      const std::uint32_t ground_end = layout.groundEnd(b, e);
       for (auto q = b; q < e; ++q) {
         const float h = heights[q];
         double d = h - ground;
-        // the lowest voxel of its column or the one right above it: ground is one or two voxels thick
-        const bool lowest = q == b || (q == b + 1 && zs[q] == zs[b] + 1);
+        const bool lowest = q < ground_end;
         // below the plane: nothing is seen under the ground
         if (lowest && d < -delta && d >= -depth_below) d = 0;
         Unary u = unary(d, delta, range_margin, alpha);

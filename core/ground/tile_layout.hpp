@@ -116,18 +116,25 @@ class TileLayout {
     for (int ly = ly0; ly < k_; ly += s) f(ly, lx0, col + ly * k_ + lx0);
   }
 
+  // the end of the ground's voxels at the bottom of the column holding positions b .. e - 1 (b < e):
+  // ground is one or two voxels thick, so its lowest voxel and the one right above it if there is
+  // one
+  std::uint32_t groundEnd(std::uint32_t b, std::uint32_t e) const {
+    return b + 1 < e && z_[b + 1] == z_[b] + 1 ? b + 2 : b + 1;
+  }
+
   // the top of the ground in the column at grid cell (x, y) as far as its lowest voxels can hold
-  // it [m]: the height of the voxel right above the lowest, if there is one, else of the lowest,
-  // or higher up the unbroken stack on the lowest while it stays within `thickness` of the lowest
-  // (a map of several sweeps with pose error has thicker ground); +inf if the column is empty or
-  // its tile is not in the layout
+  // it [m]: the height of the upper of its ground voxels (groundEnd), or higher up the unbroken
+  // stack on the lowest while it stays within `thickness` of the lowest (a map of several sweeps
+  // with pose error has thicker ground); +inf if the column is empty or its tile is not in the
+  // layout
   float groundTop(int x, int y, float thickness) const {
     const std::int64_t t = tileAt(floorDiv(x, k_), floorDiv(y, k_));
     if (t < 0) return std::numeric_limits<float>::infinity();
     const std::size_t c = static_cast<std::size_t>(floorMod(y, k_)) * k_ + static_cast<std::size_t>(floorMod(x, k_));
     const std::uint32_t b = column(static_cast<std::size_t>(t), c), e = column(static_cast<std::size_t>(t), c + 1);
     if (b == e) return std::numeric_limits<float>::infinity();
-    std::uint32_t top = b + 1 < e && z_[b + 1] == z_[b] + 1 ? b + 1 : b;
+    std::uint32_t top = groundEnd(b, e) - 1;
     while (top + 1 < e && z_[top + 1] == z_[top] + 1 && height_[top + 1] - height_[b] <= thickness) ++top;
     return height_[top];
   }
