@@ -127,6 +127,9 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("crown.min_baseline", c.crown.min_baseline, atLeast(0, "m"));
   v.number("crown.max_offcentre", c.crown.max_offcentre, closed(0, 0.5));
   v.number("crown.max_width_to_depth", c.crown.max_width_to_depth, closed(0, 10));
+  v.flag("crown.one_sided", c.crown.one_sided);
+  v.flag("crown.sky_guard", c.crown.sky_guard);
+  v.number("crown.guard_cell", c.crown.guard_cell, closed(0.1, 5, "m"));
   v.flag("crown.cut_off_tops", c.crown.cut_off_tops);
   v.number("crown.cut_off_quantile", c.crown.cut_off_quantile, closed(0, 1));
   // the crowns' visual hull

@@ -219,31 +219,46 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       // widest, and the crown's half width as the largest distance from the vertical to the nearer
       // end of a run (a crown beside it, joined on one side, does not widen it). A crown cut off by
       // the image top, near the camera, may fill the image's width at the top: its runs from the
-      // first one bounded on both sides
+      // first one bounded on both sides. With one_sided, a jump at one end only stops the widest
+      // run there, and the other end goes on (CrownConfig::one_sided)
       widest = 0, widest_left = 0, widest_row = top, half = 0;
       int prev_left = column(i, top), prev_right = prev_left, bounded = 0;
       // how far each end moved out at the row before: a crown's outline widens less and less down
       // to its widest row (steeply near its top), so only an end that moves out by more than `jump`
       // and by more than it did at the row before (2 px of slack) is something behind joining it
       int grew_left = 0, grew_right = 0;
+      // with one_sided, the ends that something behind has joined: their runs no longer bound the
+      // crown, and the other end alone goes on giving the half width
+      bool joined_left = false, joined_right = false;
       for (int row = top; row <= bottom; ++row) {
         const int u = column(i, row);
         if (!inside(u)) break;
         int left = u, right = u;
         while (left - 1 >= 0 && crown(left - 1, row)) --left;
         while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
-        if (left == 0 || right == rgb.cols - 1) {
+        if ((left == 0 && !joined_left) || (right == rgb.cols - 1 && !joined_right)) {
           if (cut && bounded == 0) continue;
           break;
         }
-        const int jump = std::max(3, (prev_right - prev_left + 1) / 10);
+        // the crown's width at the row before, from the ends that still bound it
+        const int width = joined_left    ? 2 * (prev_right - u) + 1
+                          : joined_right ? 2 * (u - prev_left) + 1
+                                         : prev_right - prev_left + 1;
+        const int jump = std::max(3, width / 10);
         const int out_left = prev_left - left, out_right = right - prev_right;
-        if (bounded >= 2 &&
-            ((out_left > jump && out_left > grew_left + 2) || (out_right > jump && out_right > grew_right + 2)))
-          break;
+        const bool jumps_left = !joined_left && out_left > jump && out_left > grew_left + 2;
+        const bool jumps_right = !joined_right && out_right > jump && out_right > grew_right + 2;
+        if (bounded >= 2 && (jumps_left || jumps_right)) {
+          if (!cfg.one_sided || joined_left || joined_right || (jumps_left && jumps_right)) break;
+          joined_left = jumps_left, joined_right = jumps_right;
+        }
         grew_left = out_left, grew_right = out_right;
-        if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
-        half = std::max(half, std::min(u - left, right - u));
+        if (joined_left || joined_right) {
+          half = std::max(half, joined_left ? right - u : u - left);
+        } else {
+          if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
+          half = std::max(half, std::min(u - left, right - u));
+        }
         prev_left = left, prev_right = right;
         ++bounded;
       }
@@ -318,7 +333,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   return measured;
 }
 
-int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg) {
+int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg, const SkyThrough& sky_through) {
   if (!cfg.enabled || samples_.empty() || mesh.vertices().empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   auto& vertices = mesh.vertices();
@@ -505,7 +520,9 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
         const Eigen::Vector2d p((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell);
         const double d2 = (p - t.centre).squaredNorm();
         if (d2 > r * r) continue;
-        raised += raiseUnderCrown(m, static_cast<float>(top - r + std::sqrt(r * r - d2)));
+        const double cap = top - r + std::sqrt(r * r - d2);
+        if (cfg.sky_guard && sky_through && sky_through(p.x(), p.y(), top - r, cap)) continue;
+        raised += raiseUnderCrown(m, static_cast<float>(cap));
       }
     }
   }

@@ -99,6 +99,24 @@ struct CrownConfig {
   // terrain cells raised by mistake from 572.5 to 190.0 a run, the error unchanged (one tree's runs,
   // joined on both sides by crowns behind it, gave a radius of 6.65 m; true 2.5 m)
   double max_width_to_depth = 2.0;
+  // Where one end of the crown's runs jumps outwards (a crown behind joins it on that side), the
+  // runs below are followed on by their other end alone, whose distance from the vertical goes on
+  // giving the crown's radius; without it the walk stops at the first such row, often above the
+  // crown's widest. Off by default: on 60 frames of every terrain type, seeds 29 and 30, it took the
+  // object-cell MAE 8.34 -> 7.80 m and the terrain cells raised by mistake 195.7 -> 262.2 a run
+  // (seed 35: 10.28 -> 9.54 m, 52.3 -> 118.2): a crown behind that joins the other end smoothly
+  // widens the runs (docs/results.md, 2026-12-07).
+  bool one_sided = false;
+  // Bound each cap from outside by the sky: the crowns' visual hull (core/crown_hull) is voted on
+  // (whether or not hull.enabled raises anything itself), and a vertex under a cap is left alone
+  // where the sky showed through every hull voxel of its column between the cap's base (its top
+  // less its radius) and the cap's height there: no crown stands there, whatever the runs said.
+  // Off by default: on 60 frames of every terrain type, seeds 29, 30, 36 and 37, it took the
+  // terrain cells raised by mistake 213.5 -> 184.6 a run and the object-cell MAE 8.49 -> 8.64 m;
+  // with one_sided 7.83 m and 258.4 cells. It costs about 16 ms a frame (urban seed 29: median
+  // 38 -> 57 ms with one_sided).
+  bool sky_guard = false;
+  double guard_cell = 1.0;  // [m] the width and height of the guard's hull voxels (skyGuardHull)
   // A crown that runs off the top of the image (a tall tree near the drive: the cameras look up to
   // 45.5 degrees) has its top above the image's top row, so the ray through that row over the
   // trunk bounds the top from below. With cut_off_tops such a frame gives a bound sample (the
@@ -217,7 +235,10 @@ class CrownSampler {
   // lies within the crown's radius (+0.5 m) of where the trunk was seen, and then raises its own
   // vertices under the cap as well.
   // Sets each trunk record's verdict.
-  int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config);
+  // sky_through(x, y, lo, hi): did the sky show through the point (x, y) [m] at every height in
+  // [lo, hi] [m] (CrownHull::skyThrough)? With config.sky_guard such a vertex is not raised.
+  using SkyThrough = std::function<bool(double x, double y, double lo, double hi)>;
+  int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& config, const SkyThrough& sky_through = {});
 
   // trunks with samples
   std::size_t trunks() const { return samples_.size(); }

@@ -163,6 +163,31 @@ std::size_t CrownHull::carve(const TerrainMesh& mesh, const VoxelMap& map, const
   return voted;
 }
 
+CrownHullConfig skyGuardHull(const CrownConfig& crown, const BoundaryEstimationConfig& estimation) {
+  CrownHullConfig cfg;
+  cfg.enabled = true;
+  cfg.cell = cfg.layer = crown.guard_cell;
+  cfg.max_radius = crown.max_radius;
+  cfg.max_distance = CrownSampler::ownersReach(crown, estimation);
+  return cfg;
+}
+
+bool CrownHull::skyThrough(double x, double y, double lo, double hi, const CrownHullConfig& cfg) const {
+  const auto it = index_.find(key(cellOf(x, cfg.cell), cellOf(y, cfg.cell)));
+  if (it == index_.end()) return false;
+  const Column& col = columns_[it->second];
+  const int n = static_cast<int>(col.layers.size());
+  // the layer holding lo, then every layer whose centre lies at or below hi, within the column
+  const int first = std::max(0, static_cast<int>(std::floor((lo - col.bottom) / cfg.layer)));
+  const int last = std::min(n - 1, std::max(first, static_cast<int>(std::floor((hi - col.bottom) / cfg.layer - 0.5))));
+  if (first > last) return false;
+  for (int j = first; j <= last; ++j) {
+    const Votes& v = col.layers[static_cast<std::size_t>(j)];
+    if (v.sky == 0 || v.foliage > v.sky) return false;
+  }
+  return true;
+}
+
 int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConfig& cfg,
                      const CrownConfig& crown_cfg) const {
   if (!cfg.enabled || columns_.empty() || mesh.vertices().empty()) return 0;

@@ -73,6 +73,11 @@ class CrownHull {
   // of vertices raised.
   int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConfig& config, const CrownConfig& crown) const;
 
+  // Did the sky show through the column of (x, y) [m] at every layer whose centre lies in [lo, hi]
+  // [m] (at least the layer holding lo): each such voxel seen as sky at least once and no more often
+  // as foliage? False where no column was voted on there.
+  bool skyThrough(double x, double y, double lo, double hi, const CrownHullConfig& config) const;
+
   std::size_t columns() const { return columns_.size(); }
   // voxels judged crown (at apply's thresholds)
   std::size_t crownVoxels(const CrownHullConfig& config) const;
@@ -103,5 +108,11 @@ class CrownHull {
   Point3 horizon_origin_ = Point3::Zero();
   std::size_t horizon_mesh_ = 0;
 };
+
+// The hull that crown completion's sky guard votes on (CrownConfig::sky_guard): voxels of
+// crown.guard_cell around every trunk within a crown's radius, out to where crown completion
+// measures trunks (CrownSampler::ownersReach), up to the hull's default height. Only its sky votes
+// are read (skyThrough).
+CrownHullConfig skyGuardHull(const CrownConfig& crown, const BoundaryEstimationConfig& estimation);
 
 }  // namespace terrain

@@ -109,7 +109,9 @@ void Pipeline::finish() {
   holdBackYoungVertices(mesh_, map_, config_.estimation);
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
-  crowns_.apply(mesh_, map_, config_.crown);
+  const CrownHullConfig guard = skyGuardHull(config_.crown, config_.estimation);
+  crowns_.apply(mesh_, map_, config_.crown,
+                [&](double x, double y, double lo, double hi) { return sky_guard_.skyThrough(x, y, lo, hi, guard); });
   hull_raised_ = hull_.apply(mesh_, map_, config_.hull, config_.crown);
   if (config_.free_space.enabled) sky_lowered_ = ceiling_.apply(mesh_, map_);
   for (auto& r : records_) {
@@ -261,6 +263,9 @@ void Pipeline::processReady(const SensorFrame& frame) {
     projected += stats.projected;
     if (owners) owners->refreshTops(mesh_);
     crowns_.measure(mesh_, map_, rgb, k, view.world_from_camera, config_.crown, config_.estimation, shared);
+    if (owners && config_.crown.enabled && config_.crown.sky_guard)
+      sky_guard_.carve(mesh_, map_, rgb, k, view.world_from_camera, *owners,
+                       skyGuardHull(config_.crown, config_.estimation), config_.crown, config_.estimation);
     if (owners)
       hull_.carve(mesh_, map_, rgb, k, view.world_from_camera, *owners, config_.hull, config_.crown,
                   config_.estimation);

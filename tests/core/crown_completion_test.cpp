@@ -641,5 +641,63 @@ TEST(CrownCompletionTest, ACrownIsNoWiderThanMaxWidthToDepthTimesItsDepth) {
   }
 }
 
+// A crown behind the tree's (a disc of 0.8 of its radius, up and to the left in the image) joins its
+// outline on the left a quarter of the way down: the left end jumps out there. The walk stops at that
+// row unless crown.one_sided lets the right end go on down to the crown's widest row.
+TEST(CrownCompletionTest, OneSidedRunsFollowACrownJoinedOnOneSideToItsWidestRow) {
+  for (const bool one_sided : {false, true}) {
+    Tree tree;
+    cv::Mat rgb = tree.image();
+    const auto centre = project(tree.k, tree.pose.inverse() * Point3(0.1, 20.1, 8.0));
+    ASSERT_TRUE(centre);
+    const double r = tree.k.fx * std::asin(3.0 / 20.0);
+    cv::circle(rgb,
+               cv::Point(static_cast<int>(std::lround(centre->x() - 1.3 * r)),
+                         static_cast<int>(std::lround(centre->y() - 0.3 * r))),
+               static_cast<int>(std::lround(0.8 * r)), cv::Scalar(40, 110, 30), cv::FILLED);
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.one_sided = one_sided;
+    CrownSampler sampler;
+    for (int frame = 0; frame < 3; ++frame)
+      ASSERT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_NEAR(tree.at(1, 100).height(), 11.0, 0.15);
+    // 2.6 m east of the trunk, inside the crown: only the walk past the joined row reaches it (the
+    // runs above it give a radius of about 2 m)
+    EXPECT_EQ(tree.at(13, 100).raised(), one_sided);
+    if (one_sided) tree.expectCap();
+  }
+}
+
+// With crown.sky_guard, a vertex under the cap through which the sky showed (here: every point more
+// than 1.5 m east of the trunk, at any height) is left alone; without it the cap is whole.
+TEST(CrownCompletionTest, TheSkyGuardLeavesAloneTheCapsVerticesTheSkyShowedThrough) {
+  for (const bool guard : {false, true}) {
+    Tree tree;
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.sky_guard = guard;
+    CrownSampler sampler;
+    for (int frame = 0; frame < 3; ++frame)
+      ASSERT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, {}), 1);
+    double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+    const auto sky_east = [&](double x, double, double lo, double hi) {
+      lowest = std::min(lowest, lo), highest = std::max(highest, hi);
+      return x > 0.1 + 1.5;
+    };
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg, sky_east), 0);
+    EXPECT_NEAR(tree.at(1, 100).height(), 11.0, 0.15);
+    // 2 m west and east of the trunk: the cap (11 - 3 + sqrt(9 - 4)) west, the ground east
+    EXPECT_NEAR(tree.at(-10, 100).height(), 8.0 + std::sqrt(5.0), 0.2);
+    EXPECT_EQ(tree.at(10, 100).raised(), !guard);
+    if (guard) {
+      // asked from the cap's base (its top less its radius, 8 m) up to the cap
+      EXPECT_NEAR(lowest, 8.0, 0.15);
+      EXPECT_NEAR(highest, 11.0, 0.15);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace terrain

@@ -142,6 +142,32 @@ TEST(CrownHullTest, SkyAndGrassMakeNoCrown) {
   for (const MeshVertex& m : tree.mesh.vertices()) EXPECT_FALSE(m.raised());
 }
 
+// The hull of crown completion's sky guard (1 m voxels out to where crowns are measured, voted on
+// whatever hull.enabled says): the sky shows through the air beside the crown at its height, not
+// through the crown, and over its top; nowhere outside the columns.
+TEST(CrownHullTest, TheSkyShowsThroughTheAirBesideACrownNotThroughIt) {
+  Roadside tree;
+  CrownHull hull;
+  const CrownConfig crown;
+  const BoundaryEstimationConfig estimation;
+  const CrownHullConfig cfg = skyGuardHull(crown, estimation);
+  EXPECT_TRUE(cfg.enabled);
+  EXPECT_EQ(cfg.cell, crown.guard_cell);
+  EXPECT_EQ(cfg.layer, crown.guard_cell);
+  EXPECT_EQ(cfg.max_distance, CrownSampler::ownersReach(crown, estimation));
+  tree.drive(hull, along(-8, 8, 0.5), cfg);
+  EXPECT_GT(hull.columns(), 0u);
+  // the crown's column from its equator (9 m) to its top (11.5 m), and half way out
+  EXPECT_FALSE(hull.skyThrough(0.1, 10.1, 9.0, 11.5, cfg));
+  EXPECT_FALSE(hull.skyThrough(1.35, 10.1, 9.0, 10.5, cfg));
+  // 4 m east of the trunk, 1.5 m outside the crown, at the crown's heights
+  EXPECT_TRUE(hull.skyThrough(4.1, 10.1, 9.0, 11.5, cfg));
+  // over the crown's top (the layer of 13-14 m: the one above lies beyond the cameras' 50 degrees up)
+  EXPECT_TRUE(hull.skyThrough(0.1, 10.1, 13.0, 13.9, cfg));
+  // outside every column (more than max_radius from the trunk)
+  EXPECT_FALSE(hull.skyThrough(12.1, 10.1, 9.0, 11.5, cfg));
+}
+
 TEST(CrownHullTest, OffItTakesNoVote) {
   Roadside tree;
   CrownHull hull;
