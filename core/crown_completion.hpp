@@ -107,8 +107,9 @@ struct CrownConfig {
   // (seed 35: 10.28 -> 9.54 m, 52.3 -> 118.2): a crown behind that joins the other end smoothly
   // widens the runs (docs/results.md, 2026-12-07).
   bool one_sided = false;
-  // Bound each cap from outside by the sky: the crowns' visual hull (core/crown_hull) is voted on
-  // (whether or not hull.enabled raises anything itself), and a vertex under a cap is left alone
+  // Bound each cap from outside by the sky: a visual hull of its own (skyGuardHull in
+  // core/crown_hull: guard_cell voxels out to where crowns are measured, whatever hull.enabled
+  // says) is voted on frame by frame, and at the end a vertex under a cap is left alone
   // where the sky showed through every hull voxel of its column between the cap's base (its top
   // less its radius) and the cap's height there: no crown stands there, whatever the runs said.
   // Off by default: on 60 frames of every terrain type, seeds 29, 30, 36 and 37, it took the

@@ -73,9 +73,9 @@ class CrownHull {
   // of vertices raised.
   int apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConfig& config, const CrownConfig& crown) const;
 
-  // Did the sky show through the column of (x, y) [m] at every layer whose centre lies in [lo, hi]
-  // [m] (at least the layer holding lo): each such voxel seen as sky at least once and no more often
-  // as foliage? False where no column was voted on there.
+  // Did the sky show through the column of (x, y) [m] from the layer holding height lo up to the
+  // last whose centre lies at or below hi [m] (at least the one): each such voxel seen as sky at
+  // least once and no more often as foliage? False where no column was voted on there.
   bool skyThrough(double x, double y, double lo, double hi, const CrownHullConfig& config) const;
 
   std::size_t columns() const { return columns_.size(); }
