@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 
 namespace terrain::app {
 
@@ -29,12 +30,19 @@ class KittiCommand : public Command {
         ->required();
     cli_->add_option("--sensor-height", sensor_height_, "lidar height above the road [m]")->capture_default_str();
     cli_->add_option("--json", json_, "also write the scores as JSON");
+    cli_->add_option("--cloud", cloud_,
+                     "also write each scan as a binary PLY in this directory (SCAN.ply): x y z, the SemanticKITTI "
+                     "class, the configured solver's ground label and the verdict (0 non-ground right, 1 ground "
+                     "right, 2 false ground, 3 missed ground, 4 unscored)");
+    cli_->add_flag("--force", force_, "replace an existing --json file or --cloud directory");
     addPipelineOptions(*cli_, config_, true);
   }
 
   int run() override {
     validate(config_);
     nlohmann::json all;
+    std::optional<io::StagedDirectory> cloud;
+    if (!cloud_.empty()) cloud.emplace(cloud_, force_);
     std::cout << std::fixed << std::setprecision(3)
               << "scan          method                 F1     IoU    precision recall\n";
     for (const auto& scan_path : scans_) {
@@ -74,14 +82,21 @@ class KittiCommand : public Command {
       }
       std::cout << "\n";
       all[scan_path.stem().string()] = j;
+      if (cloud) {
+        const auto ground = eval::segmentScan(scan.points, config_.voxel_map, config_.ground);
+        io::writeFileAtomic(cloud->path() / (scan_path.stem().string() + ".ply"),
+                            eval::kittiVerdictPly(scan.points, labels, ground), false);
+      }
     }
-    if (!json_.empty()) io::writeFileAtomic(json_, all.dump(1) + "\n", false);
+    if (!json_.empty()) io::writeFileAtomic(json_, all.dump(1) + "\n", force_);
+    if (cloud) cloud->commit();
     return 0;
   }
 
  private:
   std::vector<fs::path> scans_;
-  fs::path json_;
+  fs::path json_, cloud_;
+  bool force_ = false;
   double sensor_height_ = 1.73;
   PipelineConfig config_;
 };

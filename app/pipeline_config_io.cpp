@@ -156,12 +156,13 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
 struct SetterTable {
   std::map<std::string, io::Setter> setters;
 
-  void number(const char* name, double& f, const Range&) { setters[name] = io::numberSetter(f); }
-  void integer(const char* name, int& f, const Range&) { setters[name] = io::integerSetter(f); }
-  void count(const char* name, std::size_t& f, const Range&) {
-    setters[name] = [&f](const YAML::Node& n) {
+  void number(const char* name, double& f, const Range& r) { setters[name] = io::numberSetter(f, r); }
+  void integer(const char* name, int& f, const Range& r) { setters[name] = io::integerSetter(f, r); }
+  void count(const char* name, std::size_t& f, const Range& r) {
+    setters[name] = [&f, r](const YAML::Node& n) {
       const long long v = n.as<long long>();
       if (v < 0) throw YAML::Exception(n.Mark(), "expected a whole number from 0");
+      if (!r.contains(static_cast<double>(v))) throw io::OutOfRange(static_cast<double>(v), r.text());
       f = static_cast<std::size_t>(v);
     };
   }

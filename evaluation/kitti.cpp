@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <cstring>
 #include <map>
 #include <string>
 
@@ -71,6 +72,32 @@ json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::ui
                                    {"missed_ground", bands[k].missed_ground}};
   }
   return j;
+}
+
+std::string kittiVerdictPly(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
+                            const std::vector<std::uint8_t>& ground) {
+  std::string out =
+      "ply\nformat binary_little_endian 1.0\ncomment class (SemanticKITTI, learning order), ground label, verdict (0 "
+      "non-ground right, 1 ground right, 2 false ground, 3 missed ground, 4 unscored)\nelement vertex " +
+      std::to_string(points.size()) +
+      "\nproperty float x\nproperty float y\nproperty float z\nproperty ushort class\n"
+      "property uchar ground\nproperty uchar verdict\nend_header\n";
+  const std::size_t header = out.size();
+  constexpr std::size_t kRecord = 3 * sizeof(float) + sizeof(std::uint16_t) + 2;
+  out.resize(header + kRecord * points.size());
+  char* p = out.data() + header;
+  for (std::size_t i = 0; i < points.size(); ++i, p += kRecord) {
+    const float xyz[3] = {float(points[i].x()), float(points[i].y()), float(points[i].z())};
+    const std::uint16_t cls = labels[i];
+    const bool truth = rig::isKittiGround(labels[i]);
+    const std::uint8_t marks[2] = {ground[i], std::uint8_t(rig::isKittiIgnored(labels[i]) ? 4
+                                                           : ground[i]                    ? (truth ? 1 : 2)
+                                                                                          : (truth ? 3 : 0))};
+    std::memcpy(p, xyz, sizeof xyz);  // the PLY is little-endian, as every machine this builds on
+    std::memcpy(p + sizeof xyz, &cls, sizeof cls);
+    std::memcpy(p + sizeof xyz + sizeof cls, marks, sizeof marks);
+  }
+  return out;
 }
 
 json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,

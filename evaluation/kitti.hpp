@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace terrain::eval {
@@ -26,6 +27,12 @@ nlohmann::json kittiConfusion(const std::vector<Point3>& points, const std::vect
 nlohmann::json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                               const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground,
                               double sensor_height);
+
+// One scan as a binary little-endian PLY for a point-cloud viewer: per point x y z (float), the
+// class (ushort, readSemanticKittiLabels' learning order), the ground label (uchar) and the verdict
+// (uchar: 0 non-ground right, 1 ground right, 2 false ground, 3 missed ground, 4 unscored).
+std::string kittiVerdictPly(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
+                            const std::vector<std::uint8_t>& ground);
 
 // Per-point ground labels of the paper's method on one scan, and the time it took [ms].
 std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,

@@ -30,9 +30,13 @@ void applySettings(const std::filesystem::path& path, const std::map<std::string
     }
     try {
       it->second(value);
+    } catch (const OutOfRange& e) {
+      throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": " + key + " = " + e.what());
     } catch (const YAML::Exception& e) {
-      throw InputError(path.string() + ":" + std::to_string(value.Mark().line + 1) + ": '" + key +
-                       "' has a bad value (" + e.msg + ")");
+      // the line of the value, or of the part of it (a camera's field) the setter names
+      const int at = e.mark.is_null() ? value.Mark().line : e.mark.line;
+      throw InputError(path.string() + ":" + std::to_string(at + 1) + ": '" + key + "' has a bad value (" + e.msg +
+                       ")");
     }
   };
   // a key is a plain scalar ('? [a, b]: 1' or an empty '? :' is no setting's name)
@@ -63,17 +67,27 @@ void applySetting(const std::string& key_value, const std::map<std::string, Sett
   if (it == setters.end()) throw InputError(where + ": unknown setting '" + key + "'");
   try {
     it->second(YAML::Load(key_value.substr(eq + 1)));
+  } catch (const OutOfRange& e) {
+    throw InputError(where + ": " + e.what());
   } catch (const YAML::Exception& e) {
     throw InputError(where + ": '" + key + "' has a bad value (" + e.msg + ")");
   }
 }
 
+namespace {
+
+std::string outOfRange(double value, const std::string& range) {
+  std::ostringstream s;
+  s << value << " is out of range (allowed: " << range << ")";
+  return s.str();
+}
+
+}  // namespace
+
+OutOfRange::OutOfRange(double value, const std::string& range) : std::runtime_error(outOfRange(value, range)) {}
+
 void requireInRange(bool ok, const std::string& field, double value, const std::string& range) {
-  if (!ok) {
-    std::ostringstream s;
-    s << field << " = " << value << " is out of range (allowed: " << range << ")";
-    throw InputError(s.str());
-  }
+  if (!ok) throw InputError(field + " = " + outOfRange(value, range));
 }
 
 }  // namespace terrain::io

@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace terrain::io {
@@ -29,6 +30,14 @@ void applySetting(const std::string& key_value, const std::map<std::string, Sett
 
 // Throws InputError "<field> = <value> is out of range (allowed: <range>)" unless ok.
 void requireInRange(bool ok, const std::string& field, double value, const std::string& range);
+
+// Thrown by a setter for a value outside its setting's range; what() is "<value> is out of range
+// (allowed: <range>)", which applySettings and applySetting put after the file:line (or the option)
+// and the setting's name.
+class OutOfRange : public std::runtime_error {
+ public:
+  OutOfRange(double value, const std::string& range);
+};
 
 // The values a number may take: finite, from lo to hi, either end open or closed; with `off`, 0
 // too (the setting's "off").
@@ -51,7 +60,9 @@ struct Range {
       return o.str();
     };
     std::string t;
-    if (hi == kInf) {
+    if (lo == -kInf && hi == kInf) {
+      t = "a finite number";
+    } else if (hi == kInf) {
       t = (lo_open ? "> " : ">= ") + g(lo);
     } else {
       t = std::string(off ? "0 (off) or " : "") + (lo_open ? "(" : "[") + g(lo) + ", " + g(hi) + (hi_open ? ")" : "]");
@@ -75,12 +86,21 @@ Json& settingEntry(Json& j, const std::string& name) {
   return dot == std::string::npos ? j[name] : j[name.substr(0, dot)][name.substr(dot + 1)];
 }
 
-// Setters for plain fields.
-inline Setter numberSetter(double& f) {
-  return [&f](const YAML::Node& n) { f = n.as<double>(); };
+// Setters for plain fields, refusing a value outside `range` (by default: any finite one) where it
+// is read, so that the error can name its line.
+inline Setter numberSetter(double& f, const Range& range = {}) {
+  return [&f, range](const YAML::Node& n) {
+    const double v = n.as<double>();
+    if (!range.contains(v)) throw OutOfRange(v, range.text());
+    f = v;
+  };
 }
-inline Setter integerSetter(int& f) {
-  return [&f](const YAML::Node& n) { f = n.as<int>(); };
+inline Setter integerSetter(int& f, const Range& range = {}) {
+  return [&f, range](const YAML::Node& n) {
+    const int v = n.as<int>();
+    if (!range.contains(v)) throw OutOfRange(v, range.text());
+    f = v;
+  };
 }
 
 }  // namespace terrain::io

@@ -50,17 +50,24 @@ bool facesBody(const CameraMount& m) {
   return false;
 }
 
+// The values each field of a camera may take, where a camera list is read and in validate().
+const io::Range kCameraSize = io::closed(16, 4096, "px");
+const io::Range kCameraFovy = io::openOpen(0, 180, "deg");
+const io::Range kCameraYaw = io::closed(-180, 180, "deg");
+const io::Range kCameraTilt = io::closed(-45, 45, "deg");  // pitch and roll
+const io::Range kCameraOffset = io::closed(-5, 5, "m per axis");
+
 void validateCamera(const CameraMount& m, const std::string& field) {
-  require(m.width >= 16 && m.width <= 4096, field + ".width", m.width, "[16, 4096] px");
-  require(m.height >= 16 && m.height <= 4096, field + ".height", m.height, "[16, 4096] px");
-  require(m.fovy_deg > 0 && m.fovy_deg < 180, field + ".fovy_deg", m.fovy_deg, "(0, 180) deg");
-  require(m.yaw_deg >= -180 && m.yaw_deg <= 180, field + ".yaw_deg", m.yaw_deg, "[-180, 180] deg");
-  require(m.pitch_deg >= -45 && m.pitch_deg <= 45, field + ".pitch_deg", m.pitch_deg, "[-45, 45] deg");
-  require(m.roll_deg >= -45 && m.roll_deg <= 45, field + ".roll_deg", m.roll_deg, "[-45, 45] deg");
-  for (int i = 0; i < 3; ++i) {
-    require(std::isfinite(m.position[i]) && std::abs(m.position[i]) <= 5, field + ".position", m.position[i],
-            "[-5, 5] m per axis");
-  }
+  const auto check = [&](const io::Range& r, const char* name, double v) {
+    require(r.contains(v), field + "." + name, v, r.text());
+  };
+  check(kCameraSize, "width", m.width);
+  check(kCameraSize, "height", m.height);
+  check(kCameraFovy, "fovy_deg", m.fovy_deg);
+  check(kCameraYaw, "yaw_deg", m.yaw_deg);
+  check(kCameraTilt, "pitch_deg", m.pitch_deg);
+  check(kCameraTilt, "roll_deg", m.roll_deg);
+  for (int i = 0; i < 3; ++i) check(kCameraOffset, "position", m.position[i]);
   if (insideBox(m.position, kChassis, 0.01) ||
       (m.position.head<2>().norm() <= kMastRadius + 0.01 && m.position.z() <= kMastTop))
     throw io::InputError(field + ": the camera sits inside the robot's body (chassis or mast)");
@@ -113,22 +120,29 @@ void forEachSimSetting(SimConfig& c, Visit&& v) {
   v.number("gyro.bias_sigma", c.gyro.bias_sigma, io::closed(0, 1, "rad/s"));
 }
 
-// a YAML [x, y, z] into a vector
-io::Setter vectorSetter(Eigen::Vector3d& f) {
-  return [&f](const YAML::Node& n) {
+// a YAML [x, y, z] into a vector, each coordinate in range
+io::Setter vectorSetter(Eigen::Vector3d& f, const Range& range = {}) {
+  return [&f, range](const YAML::Node& n) {
     if (!n.IsSequence() || n.size() != 3) throw YAML::Exception(n.Mark(), "expected [x, y, z]");
-    f = {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
+    const Eigen::Vector3d v(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());
+    for (int i = 0; i < 3; ++i) {
+      if (!range.contains(v[i])) throw io::OutOfRange(v[i], range.text());
+    }
+    f = v;
   };
 }
 
 // The YAML setter of each setting.
 struct SimSetters {
   std::map<std::string, io::Setter> setters;
-  void number(const char* name, double& f, const Range&) { setters[name] = io::numberSetter(f); }
-  void unset_number(const char* name, double& f, const Range&) { setters[name] = io::numberSetter(f); }
-  void integer(const char* name, int& f, const Range&) { setters[name] = io::integerSetter(f); }
-  void unset_integer(const char* name, int& f, const Range&) { setters[name] = io::integerSetter(f); }
-  void vector(const char* name, Eigen::Vector3d& f, const Range&) { setters[name] = vectorSetter(f); }
+  void number(const char* name, double& f, const Range& r) { setters[name] = io::numberSetter(f, r); }
+  void unset_number(const char* name, double& f, const Range& r) { setters[name] = io::numberSetter(f, r); }
+  void integer(const char* name, int& f, const Range& r) { setters[name] = io::integerSetter(f, r); }
+  void unset_integer(const char* name, int& f, Range r) {
+    r.off = true;  // 0: unset, as in validate()
+    setters[name] = io::integerSetter(f, r);
+  }
+  void vector(const char* name, Eigen::Vector3d& f, const Range& r) { setters[name] = vectorSetter(f, r); }
   void text(const char* name, std::string& f) {
     setters[name] = [&f](const YAML::Node& n) { f = n.as<std::string>(); };
   }
@@ -239,8 +253,7 @@ void validate(const SimConfig& c) {
 namespace {
 
 // The list under `cameras`: a sequence of maps with the CameraMount fields (name required).
-template <typename Vec3Setter>
-std::vector<CameraMount> camerasFromYaml(const YAML::Node& list, const Vec3Setter& vec3) {
+std::vector<CameraMount> camerasFromYaml(const YAML::Node& list) {
   if (!list.IsSequence()) throw YAML::Exception(list.Mark(), "expected a list of cameras");
   std::vector<CameraMount> out;
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -251,13 +264,13 @@ std::vector<CameraMount> camerasFromYaml(const YAML::Node& list, const Vec3Sette
     m.name.clear();
     const std::map<std::string, io::Setter> fields{
         {"name", [&m](const YAML::Node& n) { m.name = n.as<std::string>(); }},
-        {"position", vec3(m.position)},
-        {"yaw_deg", io::numberSetter(m.yaw_deg)},
-        {"pitch_deg", io::numberSetter(m.pitch_deg)},
-        {"roll_deg", io::numberSetter(m.roll_deg)},
-        {"width", io::integerSetter(m.width)},
-        {"height", io::integerSetter(m.height)},
-        {"fovy_deg", io::numberSetter(m.fovy_deg)},
+        {"position", vectorSetter(m.position, kCameraOffset)},
+        {"yaw_deg", io::numberSetter(m.yaw_deg, kCameraYaw)},
+        {"pitch_deg", io::numberSetter(m.pitch_deg, kCameraTilt)},
+        {"roll_deg", io::numberSetter(m.roll_deg, kCameraTilt)},
+        {"width", io::integerSetter(m.width, kCameraSize)},
+        {"height", io::integerSetter(m.height, kCameraSize)},
+        {"fovy_deg", io::numberSetter(m.fovy_deg, kCameraFovy)},
     };
     for (const auto& kv : item) {
       const std::string key = kv.first.as<std::string>();
@@ -266,7 +279,11 @@ std::vector<CameraMount> camerasFromYaml(const YAML::Node& list, const Vec3Sette
         throw YAML::Exception(kv.first.Mark(), where + ": unknown camera field '" + key +
                                                    "' (known: name, position, yaw_deg, pitch_deg, roll_deg, width, "
                                                    "height, fovy_deg)");
-      it->second(kv.second);
+      try {
+        it->second(kv.second);
+      } catch (const io::OutOfRange& e) {
+        throw YAML::Exception(kv.second.Mark(), where + ": " + key + " = " + e.what());
+      }
     }
     if (m.name.empty()) throw YAML::Exception(item.Mark(), where + ": a camera needs a name");
     out.push_back(m);
@@ -280,7 +297,7 @@ std::vector<CameraMount> camerasFromYaml(const YAML::Node& list, const Vec3Sette
 void loadSimConfig(const std::filesystem::path& path, SimConfig& c) {
   SimSetters t;
   forEachSimSetting(c, t);
-  t.setters["cameras"] = [&c](const YAML::Node& n) { c.camera.cameras = camerasFromYaml(n, vectorSetter); };
+  t.setters["cameras"] = [&c](const YAML::Node& n) { c.camera.cameras = camerasFromYaml(n); };
   io::applySettings(path, t.setters, "robot, lidar, camera, gps, gyro");
 }
 

@@ -55,14 +55,22 @@ TEST(PipelineConfigIoTest, EverySettingRoundTripsThroughTheJson) {
                         b = s.allowed.substr(s.allowed.find(" or ") + 4);
       value = old.get<std::string>() == a ? b : a;
       expected[s.name] = value;
-    } else if (s.kind == "integer") {
-      value = std::to_string(old.get<long long>() + 1);
-      expected[s.name] = old.get<long long>() + 1;
+    } else if (s.kind == "integer" || s.kind == "number") {
+      // up a step, or down where that leaves the range (min_wall_share is 1 at most)
+      const double step = s.kind == "integer" ? 1 : 0.125;
+      for (const double v : {old.get<double>() + step, old.get<double>() - step}) {
+        value = s.kind == "integer" ? std::to_string(static_cast<long long>(v)) : nlohmann::json(v).dump();
+        expected[s.name] = v;
+        try {
+          applyPipelineSetting(s.name + "=" + value, changed, "--set");
+          break;
+        } catch (const io::InputError&) {
+          if (v < old.get<double>()) throw;
+        }
+      }
+      continue;
     } else {
-      ASSERT_EQ(s.kind, "number") << s.name;
-      const double v = old.get<double>() + 0.125;
-      value = nlohmann::json(v).dump();
-      expected[s.name] = v;
+      FAIL() << s.name << ": kind " << s.kind;
     }
     applyPipelineSetting(s.name + "=" + value, changed, "--set");
   }
@@ -75,30 +83,51 @@ TEST(PipelineConfigIoTest, EverySettingRoundTripsThroughTheJson) {
   EXPECT_EQ(nlohmann::json::parse(pipelineConfigToJson(loaded)), after);
 }
 
-// The defaults are within every range; each number refuses NaN by name, and a value out of range
-// is refused with the range as the list states it.
+// The defaults are within every range; each number refuses NaN by name as it is read (from --set,
+// and from a file with its line), and a value out of range is refused with the range as the list
+// states it, as it is read and by validate() (a value set in code).
 TEST(PipelineConfigIoTest, RangesComeFromTheList) {
   EXPECT_NO_THROW(validate(PipelineConfig{}));
+  test::TempDir dir;
   for (const auto& s : pipelineSettings()) {
     if (s.kind != "number") continue;
     PipelineConfig c;
-    applyPipelineSetting(s.name + "=.nan", c, "--set");
     try {
-      validate(c);
-      ADD_FAILURE() << s.name << " = NaN passed";
+      applyPipelineSetting(s.name + "=.nan", c, "--set");
+      ADD_FAILURE() << "--set " << s.name << "=.nan passed";
     } catch (const io::InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(s.name + " = nan is out of range (allowed: " + s.allowed + ")"),
-                std::string::npos)
+      EXPECT_EQ(std::string(e.what()), "--set " + s.name + "=.nan: nan is out of range (allowed: " + s.allowed + ")");
+    }
+    // in a file, with its line
+    const auto dot = s.name.find('.');
+    io::writeFileAtomic(dir / "nan.yaml",
+                        "# NaN\n" + s.name.substr(0, dot) + ":\n  " + s.name.substr(dot + 1) + ": .nan\n", true);
+    try {
+      loadPipelineConfig(dir / "nan.yaml", c);
+      ADD_FAILURE() << s.name << ": .nan passed";
+    } catch (const io::InputError& e) {
+      EXPECT_NE(
+          std::string(e.what()).find("nan.yaml:3: " + s.name + " = nan is out of range (allowed: " + s.allowed + ")"),
+          std::string::npos)
           << e.what();
     }
   }
   PipelineConfig c;
-  applyPipelineSetting("pose.level_cell=0", c, "--set");
+  EXPECT_THROW(applyPipelineSetting("pose.level_cell=0", c, "--set"), io::InputError);
+  c.pose.level_cell = 0;
   EXPECT_THROW(validate(c), io::InputError);
   c = PipelineConfig{};
   applyPipelineSetting("ground.stack_height=0", c, "--set");  // 0 is off
   EXPECT_NO_THROW(validate(c));
-  applyPipelineSetting("ground.stack_height=-0.1", c, "--set");
+  try {
+    applyPipelineSetting("ground.stack_height=-0.1", c, "--set");
+    ADD_FAILURE() << "ground.stack_height = -0.1 passed";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--set ground.stack_height=-0.1: -0.1 is out of range (allowed: 0 (off) or (0, 10] m)");
+  }
+  EXPECT_EQ(c.ground.stack_height, 0);  // a refused value changes nothing
+  c.ground.stack_height = -0.1;
   try {
     validate(c);
     ADD_FAILURE() << "ground.stack_height = -0.1 passed";

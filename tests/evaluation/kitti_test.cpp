@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <map>
 #include <string>
 
@@ -61,6 +62,37 @@ TEST(KittiTest, ConfusionCountsByClassAndDistance) {
   EXPECT_EQ(j["by_distance"]["30-50"]["points"], 1);
   EXPECT_EQ(j["by_distance"]["30-50"]["false_ground"], 0);
   EXPECT_EQ(j["by_distance"]["50+"]["points"], 0);
+}
+
+// The same cloud as a PLY: the header declares the points and their fields, and each record
+// holds the point, its class, its label and the verdict (vegetation unscored).
+TEST(KittiTest, TheVerdictCloudHoldsEachPointWithItsClassLabelAndVerdict) {
+  const std::vector<Point3> pts = {{5, 0, -1.7}, {15, 0, -1.7}, {0, 25, -1.5}, {40, 0, 0}, {3, 4, -1}};
+  const std::vector<std::uint16_t> labels = {8, 8, 0, 12, 14};
+  const std::vector<std::uint8_t> ground = {1, 0, 1, 0, 1};
+  const std::string ply = kittiVerdictPly(pts, labels, ground);
+  const std::string end = "end_header\n";
+  const std::size_t body = ply.find(end);
+  ASSERT_NE(body, std::string::npos);
+  const std::string header = ply.substr(0, body);
+  EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
+  EXPECT_NE(header.find("element vertex 5\n"), std::string::npos);
+  EXPECT_NE(header.find("property ushort class\nproperty uchar ground\nproperty uchar verdict\n"), std::string::npos);
+  constexpr std::size_t kRecord = 12 + 2 + 1 + 1;
+  ASSERT_EQ(ply.size(), body + end.size() + 5 * kRecord);
+  const std::uint8_t verdicts[] = {1, 3, 2, 0, 4};
+  for (std::size_t i = 0; i < 5; ++i) {
+    const char* r = ply.data() + body + end.size() + i * kRecord;
+    float xyz[3];
+    std::uint16_t cls;
+    std::memcpy(xyz, r, sizeof xyz);
+    std::memcpy(&cls, r + 12, sizeof cls);
+    EXPECT_FLOAT_EQ(xyz[0], pts[i].x());
+    EXPECT_FLOAT_EQ(xyz[2], pts[i].z());
+    EXPECT_EQ(cls, labels[i]);
+    EXPECT_EQ(std::uint8_t(r[14]), ground[i]);
+    EXPECT_EQ(std::uint8_t(r[15]), verdicts[i]) << i;
+  }
 }
 
 TEST(KittiTest, MalformedFilesAreRefused) {

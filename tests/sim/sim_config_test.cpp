@@ -125,10 +125,20 @@ TEST(SimConfigTest, BadFilesAreNamedWithTheLineAndField) {
   EXPECT_NE(errorOf(dir, "robot:\n  sped: 1\n").find("sim.yaml:2: unknown setting 'robot.sped'"), std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar:\n  max_range: far\n").find("'lidar.max_range' has a bad value"), std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar: [1, 2\n").find("not valid YAML"), std::string::npos);
-  EXPECT_NE(
-      errorOf(dir, "camera:\n  fovy_deg: 200\n").find("camera.fovy_deg = 200 is out of range (allowed: (0, 180) deg)"),
-      std::string::npos);
+  EXPECT_NE(errorOf(dir, "camera:\n  fovy_deg: 200\n")
+                .find("sim.yaml:2: camera.fovy_deg = 200 is out of range (allowed: (0, 180) deg)"),
+            std::string::npos);
   EXPECT_NE(errorOf(dir, "lidar:\n  max_range: -1\n").find("lidar.max_range"), std::string::npos);
+  // a value out of range is refused where it is read, with its line: a camera's field too
+  EXPECT_NE(errorOf(dir, "gps:\n  rate_hz: 10\n  antenna: [0, 0, .nan]\n")
+                .find("sim.yaml:3: gps.antenna = nan is out of range (allowed: [-5, 5] m per axis)"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(dir, "cameras:\n  - name: side\n    roll_deg: 90\n")
+          .find("sim.yaml:3: 'cameras' has a bad value (camera 0 (line 2): roll_deg = 90 is out of range (allowed: "
+                "[-45, 45] deg))"),
+      std::string::npos);
+  EXPECT_EQ(errorOf(dir, "camera:\n  width: 0\n"), "");  // 0: each camera's own
   EXPECT_EQ(errorOf(dir, "# all defaults\n"), "");
   // a key given twice (YAML keeps both; which one counts would be a guess)
   EXPECT_NE(errorOf(dir, "robot:\n  speed: 1\n  speed: 2\n")
