@@ -167,8 +167,8 @@ void addLidarOptions(CLI::App& cmd, LidarChoice& choice, const std::string& othe
                  "laser calibration for --lidar (ROS YAML or db.xml); default: the laser table of " + others);
   cmd.add_option("--lidar-time-base", choice.time_base,
                  "[s] added to the packets' time since the top of the hour; auto: 0 beside " + others +
-                     " (its clock), and for a capture reconstructed alone the hour of its GPS time, else of the "
-                     "capture clock")
+                     " (its clock), for a capture reconstructed alone the hour of its GPS time, else of the "
+                     "capture clock, and for a live sensor alone the hour of this machine's clock")
       ->capture_default_str();
   cmd.add_option("--lidar-idle-timeout", choice.options.idle_timeout,
                  "[s] a live lidar stream ends after this long without packets")

@@ -24,14 +24,21 @@ class ReconstructCommand : public Command {
       : Command(app.add_subcommand("reconstruct", "run the pipeline over a recorded dataset")) {
     cli_->add_option("--input", input_,
                      "dataset directory (from 'terrain record'); without it, --lidar pcap:FILE reconstructs a real "
-                     "capture alone (lidar and GPS from its packets, unscored)");
+                     "capture alone and --lidar udp:HOST:PORT a live sensor alone (lidar and GPS from its packets, "
+                     "unscored)");
     cli_->add_option("--out", out_, "output directory")->required();
     cli_->add_flag("--force", force_,
                    "replace an existing, non-empty output directory (whole, once the new one is complete)");
     addLidarOptions(*cli_, lidar_, "the dataset");
     auto* mast = cli_->add_option("--mast-height", lidar_.mast_height,
-                                  "[m] lidar height above the ground, for a capture reconstructed alone")
+                                  "[m] lidar height above the ground, for a capture or live sensor reconstructed alone")
                      ->capture_default_str();
+    position_option_ =
+        cli_->add_option("--lidar-position-port", position_port_,
+                         "a live sensor reconstructed alone (--lidar udp:HOST:PORT, no --input): the UDP port its "
+                         "position packets (GPS) come to, on HOST; 0: none are read (the rig stays where it started)")
+            ->capture_default_str()
+            ->check(CLI::Range(0, 65535));
     cli_->add_option("--sensors", sensors_,
                      "with --lidar pcap:FILE and no --input: a folder with the rig's calibration.json, camera "
                      "images (camera/NAME/images.csv: time_s,file) and gyro.csv recorded beside the capture, "
@@ -44,13 +51,22 @@ class ReconstructCommand : public Command {
   int run() override {
     validate(config_);
     if (input_.empty()) {
-      if (lidar_.endpoint.empty())
-        throw io::InputError("give --input DATASET, or --lidar pcap:FILE to reconstruct a capture alone");
+      if (lidar_.endpoint.empty()) {
+        throw io::InputError(
+            "give --input DATASET, or --lidar pcap:FILE (a capture) or udp:HOST:PORT (a live sensor) to reconstruct "
+            "it alone");
+      }
+      lidar_.options.position_port = static_cast<std::uint16_t>(position_port_);
       reconstructCapture(lidar_, config_, out_, force_, scoring_, sensors_);
       return 0;
     }
     if (!sensors_.empty())
       throw io::InputError("--sensors applies to a capture reconstructed alone (--lidar pcap:FILE without --input)");
+    if (position_option_->count() > 0) {
+      throw io::InputError(
+          "--lidar-position-port applies to a live sensor reconstructed alone (--lidar udp:HOST:PORT without "
+          "--input); beside a dataset the GPS comes from the dataset");
+    }
     auto dataset = std::make_unique<rig::DatasetSource>(input_);
     // a dataset recorded from a scene still on disk can be scored against it
     std::shared_ptr<sim::World> world;
@@ -88,6 +104,8 @@ class ReconstructCommand : public Command {
  private:
   fs::path input_, out_, sensors_;
   bool force_ = false;
+  int position_port_ = rig::velodyne::kPositionPort;
+  CLI::Option* position_option_ = nullptr;
   LidarChoice lidar_;
   eval::EvaluationOptions scoring_;
   PipelineConfig config_;

@@ -18,6 +18,7 @@
 #include <exception>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <thread>
 
 namespace terrain::app {
@@ -227,10 +228,11 @@ nlohmann::json reconstructWithLidar(std::unique_ptr<rig::SensorSource> others, c
 nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const PipelineConfig& pipe_cfg, const fs::path& out,
                                   bool force, const eval::EvaluationOptions& scoring, const fs::path& sensors_dir) {
   const rig::LidarEndpoint endpoint = rig::LidarEndpoint::parse(lidar_choice.endpoint);
-  if (endpoint.kind != rig::LidarEndpoint::Kind::Pcap) {
-    throw io::InputError("--lidar " + lidar_choice.endpoint +
-                         " without --input: a live sensor needs the other sensors "
-                         "from a dataset (--input); a capture (pcap:FILE) can be reconstructed alone");
+  const bool live = endpoint.kind == rig::LidarEndpoint::Kind::Udp;
+  if (live && !sensors_dir.empty()) {
+    throw io::InputError("--sensors " + sensors_dir.string() +
+                         ": a sensor folder goes with a capture (pcap:FILE); a live sensor is reconstructed from "
+                         "its lidar and GPS packets alone");
   }
   if (!(lidar_choice.mast_height > 0 && lidar_choice.mast_height < 10)) {
     throw io::InputError("--mast-height " + std::to_string(lidar_choice.mast_height) + ": expected (0, 10) m");
@@ -241,11 +243,23 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
   capture.lidar = lidar_choice.options;
   std::shared_ptr<const rig::SensorFolder> sensors;
   if (!sensors_dir.empty()) sensors = std::make_shared<rig::SensorFolder>(sensors_dir);
-  rig::CaptureSource source(endpoint.path, capture, lidar_choice.mast_height, sensors);
-  const auto& setup = source.setup();
-  if (lidar_choice.strict) refuseCutOff(endpoint.path, setup.cut_off);
-  refuseInputInside(out, endpoint.path, "--lidar");
+  if (live) {
+    std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe();
+    if (capture.lidar.position_port != 0) std::cerr << " and position packets on port " << capture.lidar.position_port;
+    std::cerr << "\n";
+  } else {
+    refuseInputInside(out, endpoint.path, "--lidar");
+  }
   if (sensors) refuseInputInside(out, sensors_dir, "--sensors");
+  // a capture is checked before the output is touched; for a live sensor an output that cannot be
+  // written is refused before the sensor is waited for
+  std::optional<io::StagedDirectory> staged;
+  if (live) staged.emplace(out, force);
+  auto source = live ? std::make_unique<rig::CaptureSource>(endpoint, capture, lidar_choice.mast_height)
+                     : std::make_unique<rig::CaptureSource>(endpoint.path, capture, lidar_choice.mast_height, sensors);
+  const auto& setup = source->setup();
+  if (lidar_choice.strict && !live) refuseCutOff(endpoint.path, setup.cut_off);
+  if (!live) staged.emplace(out, force);
   // what the rest of the rig is
   std::string others = "no camera, no gyro";
   if (sensors) {
@@ -256,27 +270,30 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
               (sensors->gyroSamples() ? std::to_string(sensors->gyroSamples()) + " gyro samples" : "no gyro") +
               " from " + sensors_dir.string();
   }
-  io::StagedDirectory staged(out, force);
-  std::cout << "reconstruct: " << endpoint.path << ", an " << rig::velodyne::modelName(setup.model)
-            << " capture, calibration " << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0)
-            << setup.time_base << " s from the " << setup.time_base_source << "; " << others
-            << "; unscored (a real capture has no ground truth)\n";
-  nlohmann::json report = reconstruct(source, pipe_cfg, staged.path(), nullptr, scoring);
-  std::vector<std::string> notes = {"unscored: a real capture has no ground truth"};
+  std::cout << "reconstruct: " << (live ? endpoint.describe() : endpoint.path) << ", an "
+            << rig::velodyne::modelName(setup.model) << (live ? " sensor" : " capture") << ", calibration "
+            << setup.lasers.source << ", time base " << std::fixed << std::setprecision(0) << setup.time_base
+            << " s from the " << setup.time_base_source << "; " << others << "; unscored (a real "
+            << (live ? "sensor" : "capture") << " has no ground truth)\n";
+  nlohmann::json report = reconstruct(*source, pipe_cfg, staged->path(), nullptr, scoring);
+  std::vector<std::string> notes = {std::string("unscored: a real ") + (live ? "sensor" : "capture") +
+                                    " has no ground truth"};
   if (!sensors || sensors->calibration().cameras.empty())
     notes.push_back("no camera images, so nothing above the lidar's reach is recovered");
   if (!sensors || sensors->gyroSamples() == 0)
     notes.push_back("no gyro, so the heading comes from the GPS track alone");
   report["sensors"] = others;
-  if (!setup.first_fix)
-    notes.push_back("the capture has no GPS fix: the rig is taken to stand where it started, heading east");
+  if (!setup.first_fix) {
+    notes.push_back(std::string(live ? "no GPS fix came in the first 2 s" : "the capture has no GPS fix") +
+                    ": the rig is taken to stand where it started, heading east");
+  }
   report["scored"] = false;
   report["time_base_s"] = setup.time_base;
   report["time_base_source"] = setup.time_base_source;
-  addLidarToOutputs(staged.path(), report, source.lidar(), setup.cut_off, notes);
+  addLidarToOutputs(staged->path(), report, source->lidar(), setup.cut_off, notes);
   throwIfInterrupted();
-  staged.commit();
-  std::cout << "lidar " << source.lidar().summary() << "\noutputs in " << fs::absolute(out).string() << "\n";
+  staged->commit();
+  std::cout << "lidar " << source->lidar().summary() << "\noutputs in " << fs::absolute(out).string() << "\n";
   return report;
 }
 

@@ -53,29 +53,10 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
   std::unique_ptr<rig::pcap::Writer> capture;
   std::unique_ptr<rig::velodyne::PacketEncoder> encoder;
   std::vector<rig::velodyne::TimedPacket> packets;
-  // position packets (port 8308) for the GPS fixes: $GPGGA for every fix, $GPRMC (the date) once a
-  // simulated second, each at its fix's time
-  struct PositionOut {
-    double time;
-    std::vector<std::uint8_t> payload;
-  };
-  std::vector<PositionOut> positions;
+  // position packets (port 8308) for the GPS fixes
+  rig::velodyne::PositionEncoder position_encoder(rig::pcap::kSimulationEpoch);
+  std::vector<rig::velodyne::TimedPosition> positions;
   long long position_packets = 0;
-  double last_rmc_second = -1;
-  const auto addPositions = [&](const std::vector<GpsFix>& fixes) {
-    for (const GpsFix& f : fixes) {
-      const double epoch = rig::pcap::kSimulationEpoch + f.time;
-      const auto stamp = static_cast<std::uint32_t>(std::llround(f.time * 1e6) % 3600000000LL);
-      positions.push_back({f.time, rig::velodyne::positionPacket(
-                                       stamp, rig::velodyne::gpggaSentence(epoch, f.latitude_deg, f.longitude_deg,
-                                                                           f.altitude_m, f.sigma_m / 2.5))});
-      if (std::floor(f.time) != last_rmc_second) {
-        last_rmc_second = std::floor(f.time);
-        positions.push_back({f.time, rig::velodyne::positionPacket(
-                                         stamp, rig::velodyne::gprmcSentence(epoch, f.latitude_deg, f.longitude_deg))});
-      }
-    }
-  };
   // data and position packets in time order (a fix before the data packets of the same time)
   auto writePackets = [&] {
     std::size_t next = 0;
@@ -102,7 +83,7 @@ int record(const fs::path& scene_path, int frames, const fs::path& out, bool for
     points += static_cast<long long>(frame->sensors.sweep.points.size());
     writer.write(*frame);
     if (encoder) {
-      addPositions(frame->sensors.gps);
+      position_encoder.add(frame->sensors.gps, positions);
       encoder->addSweep(frame->sensors.sweep, packets);
       writePackets();
     }

@@ -3,6 +3,7 @@
 #include "rig/file_io.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -14,6 +15,24 @@ fs::path shippedCalibration(velodyne::Model model) {
   return fs::path(TERRAIN_DATA_DIR) / "calibration" /
          (model == velodyne::Model::Hdl32E ? "hdl32e.yaml" : "hdl64e_s2.1-sztaki.yaml");
 }
+
+namespace {
+
+// The laser table for packets of `model`: the given one, which must have the model's lasers, or
+// the shipped one. `holding` names where the packets are ("FILE holds", "udp:... sends").
+LaserCalibration laserTable(velodyne::Model model, const fs::path& given, const std::string& holding) {
+  const fs::path table = given.empty() ? shippedCalibration(model) : given;
+  LaserCalibration lasers = loadLaserCalibration(table);
+  const int wanted = velodyne::timing(model).lasers;
+  if (lasers.laserCount() != wanted) {
+    throw io::InputError(table.string() + ": " + std::to_string(lasers.laserCount()) + " lasers, but " + holding + " " +
+                         velodyne::modelName(model) + " packets (" + std::to_string(wanted) +
+                         " lasers); give that sensor's calibration, or none to take the shipped one");
+  }
+  return lasers;
+}
+
+}  // namespace
 
 CaptureSetup setupCapture(const fs::path& path, const CaptureOptions& options) {
   CaptureSetup setup;
@@ -64,16 +83,7 @@ CaptureSetup setupCapture(const fs::path& path, const CaptureOptions& options) {
   }
   setup.model = *model;
   setup.cut_off = reader.stats().error;
-  // the laser table: the given one must have the model's lasers
-  const fs::path table = options.calibration.empty() ? shippedCalibration(*model) : options.calibration;
-  setup.lasers = loadLaserCalibration(table);
-  const int wanted = velodyne::timing(*model).lasers;
-  if (setup.lasers.laserCount() != wanted) {
-    throw io::InputError(table.string() + ": " + std::to_string(setup.lasers.laserCount()) + " lasers, but " +
-                         path.string() + " holds " + velodyne::modelName(*model) + " packets (" +
-                         std::to_string(wanted) +
-                         " lasers); give that sensor's calibration, or none to take the shipped one");
-  }
+  setup.lasers = laserTable(*model, options.calibration, path.string() + " holds");
   // the time base: given, else from the GPS time, else from the capture clock
   if (options.time_base) {
     setup.time_base = *options.time_base;
@@ -187,6 +197,83 @@ CaptureScan scanCapture(const fs::path& path, const CaptureOptions& options, con
 CaptureSource::CaptureSource(const fs::path& path, const CaptureOptions& options, double mast_height,
                              std::shared_ptr<const SensorFolder> sensors)
     : setup_(setupCapture(path, options)), sensors_(std::move(sensors)) {
+  placeRig(mast_height);
+  VelodyneOptions lidar_options = options.lidar;
+  lidar_options.decoder.time_base = setup_.time_base;
+  LidarEndpoint endpoint;
+  endpoint.kind = LidarEndpoint::Kind::Pcap;
+  endpoint.path = path.string();
+  lidar_ = std::make_unique<VelodyneLidar>(endpoint, setup_.lasers, lidar_options);
+}
+
+CaptureSource::CaptureSource(const LidarEndpoint& live, const CaptureOptions& options, double mast_height) {
+  const std::string where = live.describe();
+  auto data = std::make_unique<UdpReceiver>(live.host, live.port);
+  std::unique_ptr<UdpReceiver> position;
+  if (options.lidar.position_port != 0 && options.lidar.position_port != live.port) {
+    try {
+      position = std::make_unique<UdpReceiver>(live.host, options.lidar.position_port);
+    } catch (const io::InputError& e) {
+      throw io::InputError(std::string(e.what()) + " (the position packets, GPS; --lidar-position-port 0 reads none)");
+    }
+  }
+  // the first data packet of a known model sets the laser table and the time base
+  std::vector<std::uint8_t> first(65536);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(options.lidar.first_timeout);
+  long long other = 0;
+  std::string first_reason;
+  std::optional<velodyne::Model> model;
+  while (!model) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const long n = left.count() > 0 ? data->receive(first.data(), first.size(), left) : -1;
+    if (n < 0) {
+      std::ostringstream m;
+      m << where << ": no lidar data packet of a known model arrived within " << options.lidar.first_timeout
+        << " s (--lidar-first-packet-timeout)";
+      if (other > 0) m << "; " << other << " other datagrams (first: " << first_reason << ")";
+      m << "; is the sensor on, and sending to this host and port?";
+      throw io::InputError(m.str());
+    }
+    first.resize(static_cast<std::size_t>(std::min<long>(n, 65536)));
+    std::string why;
+    model = velodyne::packetModel(first.data(), first.size(), &why);
+    if (!model && other++ == 0) first_reason = why;
+    if (!model) first.resize(65536);
+  }
+  setup_.model = *model;
+  setup_.lasers = laserTable(*model, options.calibration, where + " sends");
+  setup_.data_packets = 1;
+  if (options.time_base) {
+    setup_.time_base = *options.time_base;
+    setup_.time_base_source = "given";
+  } else {
+    // the top of the hour that puts the packet nearest to the host clock's time now
+    const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    setup_.time_base = std::round((now - velodyne::payloadTimestamp(first.data()) * 1e-6) / 3600.0) * 3600.0;
+    setup_.time_base_source = "host clock";
+  }
+  VelodyneOptions lidar_options = options.lidar;
+  lidar_options.decoder.time_base = setup_.time_base;
+  lidar_ = std::make_unique<VelodyneLidar>(live, std::move(data), std::move(position), std::move(first), setup_.lasers,
+                                           lidar_options);
+  // the world's origin is the first fix: wait for one over up to 2 s of sweeps (a Velodyne sends a
+  // position packet a second), keeping the sweeps for next()
+  if (lidar_->positionPort() != 0) {
+    while (pending_.empty()) {
+      auto sweep = lidar_->next();
+      if (!sweep) break;
+      const bool enough = !buffered_.empty() && sweep->end_time - buffered_.front().start_time >= 2.0;
+      buffered_.push_back(std::move(*sweep));
+      for (const GpsFix& g : lidar_->takeFixes()) pending_.push_back(g);
+      if (enough) break;
+    }
+  }
+  if (!pending_.empty()) setup_.first_fix = pending_.front();
+  placeRig(mast_height);
+}
+
+void CaptureSource::placeRig(double mast_height) {
   if (sensors_) {
     calibration_ = sensors_->calibration();
   } else {
@@ -199,16 +286,16 @@ CaptureSource::CaptureSource(const fs::path& path, const CaptureOptions& options
     calibration_.origin.longitude_deg = setup_.first_fix->longitude_deg;
     calibration_.origin.altitude_m = setup_.first_fix->altitude_m;
   }
-  VelodyneOptions lidar_options = options.lidar;
-  lidar_options.decoder.time_base = setup_.time_base;
-  LidarEndpoint endpoint;
-  endpoint.kind = LidarEndpoint::Kind::Pcap;
-  endpoint.path = path.string();
-  lidar_ = std::make_unique<VelodyneLidar>(endpoint, setup_.lasers, lidar_options);
 }
 
 std::optional<RigFrame> CaptureSource::next() {
-  auto sweep = lidar_->next();
+  std::optional<LidarSweep> sweep;
+  if (!buffered_.empty()) {
+    sweep = std::move(buffered_.front());
+    buffered_.pop_front();
+  } else {
+    sweep = lidar_->next();
+  }
   if (!sweep) return std::nullopt;
   // the fixes timed before the sweep's end belong to it (as the simulated rig frames them)
   for (const GpsFix& g : lidar_->takeFixes()) pending_.push_back(g);

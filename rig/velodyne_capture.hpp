@@ -7,6 +7,7 @@
 #include "rig/sensor_source.hpp"
 #include "rig/velodyne_source.hpp"
 
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -86,10 +87,19 @@ CaptureScan scanCapture(const std::filesystem::path& path, const CaptureOptions&
 // sweep carries the folder's images and gyro samples timed in (the previous sweep's end, its end].
 // The world origin is the first fix (0, 0 without one: the pipeline then keeps the rig where it
 // stands, heading east).
+//
+// Live (udp:HOST:PORT), the same from a sensor on the network, with no sensor folder: the data port
+// is bound, and options.lidar.position_port unless 0; the first data packet of a known model (within
+// options.lidar.first_timeout) gives the model and so the laser table (the given one must fit it),
+// and the time base when none is given (the top of the hour that puts that packet nearest to the
+// host clock: setup().time_base_source "host clock"). The constructor then reads sweeps until a
+// GPS fix comes or they span 2 s, and keeps them for next(). Throws io::InputError naming the
+// address when a port cannot be bound or no data packet arrives.
 class CaptureSource : public SensorSource {
  public:
   CaptureSource(const std::filesystem::path& path, const CaptureOptions& options, double mast_height,
                 std::shared_ptr<const SensorFolder> sensors = nullptr);
+  CaptureSource(const LidarEndpoint& live, const CaptureOptions& options, double mast_height);
 
   const RigCalibration& calibration() const override { return calibration_; }
   const LaserCalibration& lasers() const override { return lidar_->calibration(); }
@@ -105,6 +115,8 @@ class CaptureSource : public SensorSource {
   std::unique_ptr<VelodyneLidar> lidar_;
   std::shared_ptr<const SensorFolder> sensors_;
   std::vector<GpsFix> pending_;
+  std::deque<LidarSweep> buffered_;  // sweeps read before the first frame (live: waiting for a fix)
+  void placeRig(double mast_height);
   double last_end_ = -std::numeric_limits<double>::infinity();  // the previous sweep's end [s]
   int index_ = 0;
 };

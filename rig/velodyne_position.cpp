@@ -259,4 +259,17 @@ GpsFix gpsFix(const PositionPacket& packet, const NmeaFix& fix, double time_base
   return g;
 }
 
+void PositionEncoder::add(const std::vector<GpsFix>& fixes, std::vector<TimedPosition>& out) {
+  for (const GpsFix& f : fixes) {
+    const double epoch = epoch_ + f.time;
+    const auto stamp = static_cast<std::uint32_t>(std::llround(f.time * 1e6) % 3600000000LL);
+    out.push_back({f.time, positionPacket(stamp, gpggaSentence(epoch, f.latitude_deg, f.longitude_deg, f.altitude_m,
+                                                               f.sigma_m / 2.5))});
+    if (std::floor(f.time) != last_rmc_second_) {
+      last_rmc_second_ = std::floor(f.time);
+      out.push_back({f.time, positionPacket(stamp, gprmcSentence(epoch, f.latitude_deg, f.longitude_deg))});
+    }
+  }
+}
+
 }  // namespace terrain::rig::velodyne

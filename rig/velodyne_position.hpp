@@ -61,6 +61,25 @@ std::string gprmcSentence(double epoch, double latitude_deg, double longitude_de
 // back as the ellipsoidal height), angles to 1e-7 minute (0.2 mm).
 std::string gpggaSentence(double epoch, double latitude_deg, double longitude_deg, double altitude_m, double hdop);
 
+// Position packets for a rig's GPS fixes, as a Velodyne with a receiver wired to it would send
+// them: a $GPGGA for every fix and a $GPRMC (it carries the date) once a second, each at its fix's
+// time, stamped with that time's microseconds since the top of the hour. `epoch` [s since 1970,
+// UTC] is the UTC time of rig time 0.
+struct TimedPosition {
+  double time = 0;  // [s] rig time
+  std::vector<std::uint8_t> payload;
+};
+class PositionEncoder {
+ public:
+  explicit PositionEncoder(double epoch) : epoch_(epoch) {}
+  // appends the packets of these fixes (in time order) to out
+  void add(const std::vector<GpsFix>& fixes, std::vector<TimedPosition>& out);
+
+ private:
+  double epoch_;
+  double last_rmc_second_ = -1;
+};
+
 // The time base [s] that puts a packet timestamp on UTC: the top of the hour such that
 // base + timestamp_us lies nearest to the UTC time the packet's sentence gives.
 double timeBaseFromFix(std::uint32_t timestamp_us, double fix_epoch);

@@ -132,8 +132,30 @@ VelodyneLidar::VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration cal
                                            std::vector<std::uint16_t>{endpoint_.port, velodyne::kPositionPort});
   } else {
     udp_ = std::make_unique<UdpReceiver>(endpoint_.host, endpoint_.port);
+    if (options_.position_port != 0 && options_.position_port != endpoint_.port)
+      position_udp_ = std::make_unique<UdpReceiver>(endpoint_.host, options_.position_port);
     buffer_.resize(65536);  // the largest UDP datagram
   }
+}
+
+VelodyneLidar::VelodyneLidar(const LidarEndpoint& endpoint, std::unique_ptr<UdpReceiver> data,
+                             std::unique_ptr<UdpReceiver> position, std::vector<std::uint8_t> first,
+                             LaserCalibration calibration, VelodyneOptions options)
+    : endpoint_(endpoint),
+      options_(options),
+      assembler_(std::move(calibration), options.decoder),
+      udp_(std::move(data)),
+      position_udp_(std::move(position)),
+      first_(std::move(first)) {
+  buffer_.resize(65536);
+  received_ = true;
+}
+
+void VelodyneLidar::drainPositions() {
+  if (!position_udp_) return;
+  std::uint8_t packet[2048];
+  for (long n; (n = position_udp_->receive(packet, sizeof packet, std::chrono::milliseconds(0))) >= 0;)
+    position(packet, static_cast<std::size_t>(std::min<long>(n, sizeof packet)));
 }
 
 VelodyneLidar::~VelodyneLidar() = default;
@@ -148,16 +170,21 @@ std::optional<LidarSweep> VelodyneLidar::next() {
       pcap::Frame f;
       got = pcap_->next(f);
       if (got && f.port == velodyne::kPositionPort && endpoint_.port != velodyne::kPositionPort) {
-        position(f.payload);
+        position(f.payload.data(), f.payload.size());
         continue;
       }
       if (got && !assembler_.push(f.payload.data(), f.payload.size(), ready_))
         checkModel(f.payload.data(), f.payload.size());
+    } else if (!first_.empty()) {
+      got = true;
+      if (!assembler_.push(first_.data(), first_.size(), ready_)) checkModel(first_.data(), first_.size());
+      first_.clear();
     } else {
       const double wait = received_ ? options_.idle_timeout : options_.first_timeout;
       const long n =
           udp_->receive(buffer_.data(), buffer_.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000)));
       got = n >= 0;
+      drainPositions();
       if (!got && !received_) {
         std::ostringstream m;
         m << endpoint_.describe() << ": no packet arrived within " << options_.first_timeout
@@ -191,10 +218,10 @@ void VelodyneLidar::checkModel(const std::uint8_t* data, std::size_t size) {
   }
 }
 
-void VelodyneLidar::position(const std::vector<std::uint8_t>& payload) {
+void VelodyneLidar::position(const std::uint8_t* data, std::size_t size) {
   ++position_.packets;
   std::string why;
-  const auto packet = velodyne::parsePositionPacket(payload.data(), payload.size(), &why);
+  const auto packet = velodyne::parsePositionPacket(data, size, &why);
   const auto note = [this](const std::string& reason) {
     if (position_.first_problem.empty()) position_.first_problem = reason;
   };

@@ -69,6 +69,9 @@ struct VelodyneOptions {
   velodyne::DecoderOptions decoder;
   double idle_timeout = 2.0;    // [s] a live stream ends after this long without a packet (once one came)
   double first_timeout = 30.0;  // [s] no packet within this long is an error
+  // a live source: the UDP port its position packets (GPS) come to, on the data socket's address,
+  // read as data packets arrive (0: none are read, as beside another source of GPS)
+  std::uint16_t position_port = 0;
 };
 
 // What the position packets (port 8308) of a capture held.
@@ -84,8 +87,8 @@ struct PositionStats {
   std::string summary() const;
 };
 
-// Sweeps from a live sensor or a capture. A capture's position packets become GPS fixes on the
-// data packets' clock (takeFixes). A live source reads data packets only.
+// Sweeps from a live sensor or a capture. Position packets become GPS fixes on the data packets'
+// clock (takeFixes): a capture's, and a live source's when it listens on a position port.
 //
 // Failures (io::InputError, naming the source): packets of another model than the calibration's
 // (the calibration says 64 lasers, the packets are an HDL-32E's); no packet within first_timeout
@@ -93,6 +96,11 @@ struct PositionStats {
 class VelodyneLidar {
  public:
   VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration calibration, VelodyneOptions options = {});
+  // A live source on sockets already bound (data, and position unless null) whose first data
+  // packet was read already (`first`, decoded before anything else is received): the caller chose
+  // the laser table and time base from it.
+  VelodyneLidar(const LidarEndpoint& endpoint, std::unique_ptr<UdpReceiver> data, std::unique_ptr<UdpReceiver> position,
+                std::vector<std::uint8_t> first, LaserCalibration calibration, VelodyneOptions options);
   ~VelodyneLidar();
 
   // The next complete sweep; the partial sweep at the end of the stream comes last; nullopt after.
@@ -110,19 +118,23 @@ class VelodyneLidar {
   velodyne::Model model() const { return assembler_.model(); }
   // the bound UDP port of a live source (useful after binding port 0), 0 for a capture
   std::uint16_t port() const { return udp_ ? udp_->port() : 0; }
+  // the bound position port of a live source, 0 if it reads none
+  std::uint16_t positionPort() const { return position_udp_ ? position_udp_->port() : 0; }
 
  private:
   LidarEndpoint endpoint_;
   VelodyneOptions options_;
   velodyne::SweepAssembler assembler_;
   std::unique_ptr<pcap::Reader> pcap_;
-  std::unique_ptr<UdpReceiver> udp_;
+  std::unique_ptr<UdpReceiver> udp_, position_udp_;
   std::vector<std::uint8_t> buffer_;  // one datagram, for a live source
+  std::vector<std::uint8_t> first_;   // a live source's first data packet, not decoded yet
+  void drainPositions();
   std::vector<LidarSweep> ready_;
   std::size_t ready_pos_ = 0;
   bool ended_ = false;
   bool received_ = false;
-  void position(const std::vector<std::uint8_t>& payload);
+  void position(const std::uint8_t* data, std::size_t size);
   void checkModel(const std::uint8_t* data, std::size_t size);
   PositionStats position_;
   std::vector<GpsFix> fixes_;

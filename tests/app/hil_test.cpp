@@ -88,6 +88,41 @@ TEST_F(HilTest, LoopbackUdpStreamScoresLikeTheDataset) {
   EXPECT_NE(text.find("4166 packets, 4166 decoded"), std::string::npos) << text;
 }
 
+// A live sensor alone: 'terrain stream' sends the capture's data and position packets, and
+// 'terrain reconstruct --lidar udp:…' without a dataset takes its GPS from the position packets:
+// the same mesh as the capture reconstructed alone (the lidar and GPS the same, on another time base).
+TEST_F(HilTest, ALiveSensorAloneReconstructsLikeItsCapture) {
+  std::uint16_t port, position_port;
+  {
+    rig::UdpReceiver a("127.0.0.1", 0), b("127.0.0.1", 0);
+    port = a.port();
+    position_port = b.port();
+  }
+  const fs::path out = *dir_ / "live_alone", log = *dir_ / "live_alone.log", ref = *dir_ / "capture_alone";
+  std::thread receiver([&] {
+    sh(kCli + " reconstruct --lidar udp:127.0.0.1:" + std::to_string(port) + " --lidar-position-port " +
+       std::to_string(position_port) + " --lidar-idle-timeout 1 --out " + out.string() + " > " + log.string() +
+       " 2>&1");
+  });
+  for (int i = 0; i < 600; ++i) {
+    if (fs::exists(log) && io::readFile(log).find("listening") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(0, sh(kCli + " stream --pcap " + (ds() / "lidar.pcap").string() + " --to 127.0.0.1:" +
+                  std::to_string(port) + " --position-port " + std::to_string(position_port) + " > /dev/null 2>&1"));
+  receiver.join();
+  ASSERT_EQ(0, sh(kCli + " reconstruct --lidar pcap:" + (ds() / "lidar.pcap").string() + " --out " + ref.string() +
+                  " > /dev/null 2>&1"));
+  ASSERT_TRUE(fs::exists(out / "report.json")) << io::readFile(log);
+  const std::string text = io::readFile(log);
+  EXPECT_NE(text.find("time base"), std::string::npos) << text;
+  EXPECT_NE(text.find("from the host clock"), std::string::npos) << text;
+  EXPECT_NE(text.find("GPS fixes"), std::string::npos) << text;
+  EXPECT_EQ(text.find("no GPS fix came"), std::string::npos) << text;
+  EXPECT_EQ(report(out)["scored"], false);
+  EXPECT_EQ(io::readFile(out / "mesh.ply"), io::readFile(ref / "mesh.ply"));
+}
+
 TEST_F(HilTest, SimulatedRigWithAStreamedLidarScoresLikeTheInProcessRun) {
   // 'terrain run --lidar udp:…': camera, GPS and gyro simulated, the lidar streamed by
   // 'terrain stream --scene' from the same scene

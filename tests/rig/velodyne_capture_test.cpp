@@ -9,9 +9,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <thread>
 
 namespace terrain::rig {
 namespace {
@@ -356,6 +359,79 @@ TEST(VelodyneCaptureTest, ALiveStreamWithoutAPacketIsAnErrorAfterTheFirstPacketT
   }
 }
 
+// a UDP port free a moment ago (binding port 0 finds one)
+std::uint16_t freePort() { return UdpReceiver("127.0.0.1", 0).port(); }
+
+// A live HDL-32E alone: its model found from its first packet, the shipped table taken, the time
+// base from the host clock, and its position packets (another port) give the fixes and the origin.
+TEST(VelodyneCaptureTest, ALiveSensorAloneFindsItsModelAndTakesItsGpsFromItsPositionPackets) {
+  const std::uint16_t data_port = freePort(), position_port = freePort();
+  ASSERT_NE(data_port, position_port);
+  const double hour = pcap::kSimulationEpoch + 10 * 3600.0;
+  const auto packets = ringPackets(hdl32(), 2170, 25);  // 2.5 s
+  std::thread sensor([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    UdpSender data("127.0.0.1", data_port), position("127.0.0.1", position_port);
+    int next_fix = 0;
+    for (std::size_t i = 0; i < packets.size(); ++i) {
+      if (next_fix < 3 && packets[i].time >= next_fix) {
+        const auto p = velodyne::positionPacket(static_cast<std::uint32_t>(next_fix * 1000000),
+                                                velodyne::gprmcSentence(hour + next_fix, 47.0 + 1e-5 * next_fix, 8.5));
+        position.send(p.data(), p.size());
+        ++next_fix;
+      }
+      data.send(packets[i].payload.data(), packets[i].payload.size());
+      if (i % 16 == 15) std::this_thread::sleep_for(std::chrono::milliseconds(1));  // within the socket's buffer
+    }
+  });
+  CaptureOptions options;
+  options.lidar.position_port = position_port;
+  options.lidar.first_timeout = 10;
+  options.lidar.idle_timeout = 0.5;
+  LidarEndpoint live = LidarEndpoint::parse("udp:127.0.0.1:" + std::to_string(data_port));
+  std::optional<CaptureSource> source;
+  try {
+    source.emplace(live, options, 1.8);
+  } catch (...) {
+    sensor.join();
+    throw;
+  }
+  const CaptureSetup& setup = source->setup();
+  EXPECT_EQ(setup.model, Model::Hdl32E);
+  EXPECT_EQ(setup.lasers.laserCount(), 32);
+  EXPECT_EQ(setup.time_base_source, "host clock");
+  const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  EXPECT_LT(std::abs(setup.time_base - now), 3600.0 + 10.0);
+  EXPECT_DOUBLE_EQ(std::fmod(setup.time_base, 3600.0), 0.0);
+  ASSERT_TRUE(setup.first_fix.has_value());
+  EXPECT_DOUBLE_EQ(source->calibration().origin.latitude_deg, 47.0);
+  EXPECT_DOUBLE_EQ(source->calibration().origin.longitude_deg, 8.5);
+  int sweeps = 0;
+  std::vector<double> fix_times;
+  while (auto f = source->next()) {
+    ++sweeps;
+    for (const GpsFix& g : f->sensors.gps) {
+      EXPECT_LT(g.time, f->sensors.sweep.end_time);
+      fix_times.push_back(g.time - setup.time_base);
+    }
+  }
+  sensor.join();
+  EXPECT_GE(sweeps, 24);
+  EXPECT_EQ(source->lidar().positionStats().fixes, 3);
+  ASSERT_EQ(fix_times.size(), 3u);
+  EXPECT_NEAR(fix_times[0], 0.0, 1e-6);  // on the data packets' clock, whatever the NMEA time
+  EXPECT_NEAR(fix_times[2], 2.0, 1e-6);
+  // a live source whose position port another program holds is refused, naming it
+  source.reset();
+  try {
+    UdpReceiver busy("127.0.0.1", position_port);
+    CaptureSource again(LidarEndpoint::parse("udp:127.0.0.1:0"), options, 1.8);
+    ADD_FAILURE() << "bound a position port already in use";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--lidar-position-port 0 reads none"), std::string::npos) << e.what();
+  }
+}
+
 // The command line: each failure exits 2 with its message and leaves an existing --out as it was.
 TEST(VelodyneCaptureTest, LidarCommandsFailLoudlyAndLeaveOutputsAlone) {
   test::TempDir dir;
@@ -403,7 +479,11 @@ TEST(VelodyneCaptureTest, LidarCommandsFailLoudlyAndLeaveOutputsAlone) {
   fails("reconstruct --lidar pcap:" + (dir / "pos.pcap").string() + " --out " + out.string() + " --force",
         "no lidar data packet");
   fails("reconstruct --lidar pcap:" + cut + " --strict --out " + out.string() + " --force", "cut off");
-  fails("reconstruct --lidar udp:127.0.0.1:0 --out " + out.string() + " --force", "can be reconstructed alone");
+  fails("reconstruct --lidar udp:127.0.0.1:0 --lidar-first-packet-timeout 0.3 --lidar-position-port 0 --out " +
+            out.string() + " --force",
+        "no lidar data packet of a known model arrived within 0.3 s");
+  fails("reconstruct --lidar udp:127.0.0.1:0 --sensors " + dir.path().string() + " --out " + out.string() + " --force",
+        "a sensor folder goes with a capture");
   EXPECT_EQ(io::readFile(out / "sweeps.csv"), before);
   for (const auto& e : fs::directory_iterator(dir.path())) {
     EXPECT_EQ(e.path().string().find(".partial"), std::string::npos) << e.path();
