@@ -53,12 +53,14 @@ void addSimOptions(CLI::App& cmd, sim::SimConfig& c, const std::string& flag) {
       ->capture_default_str();
   cmd.add_flag("!--no-camera", c.camera.enabled, "do not render camera frames");
   addCameraRigOption(cmd, c.camera.rig);
-  cmd.add_option("--width", c.camera.width, "image width [px] of every camera (default: each camera's own, 640)");
-  cmd.add_option("--height", c.camera.height, "image height [px] of every camera (default: each camera's own, 480)");
+  cmd.add_option("--width", c.camera.width,
+                 "image width [px] of every camera, in [16, 4096] (default: each camera's own, 640)");
+  cmd.add_option("--height", c.camera.height,
+                 "image height [px] of every camera, in [16, 4096] (default: each camera's own, 480)");
   cmd.add_option("--fovy", c.camera.fovy_deg,
-                 "vertical field of view [deg] of every camera (default: each camera's own, 75)");
+                 "vertical field of view [deg] of every camera, in (0, 180) (default: each camera's own, 75)");
   cmd.add_option("--camera-pitch", c.camera.pitch_deg,
-                 "upward tilt [deg] of every camera (default: each camera's own, 8)");
+                 "upward tilt [deg] of every camera, in [-45, 45] (default: each camera's own, 8)");
   cmd.add_option("--gps-sigma", c.gps.horizontal_sigma, "GPS horizontal 1-sigma noise [m]")->capture_default_str();
   cmd.add_option("--gyro-noise", c.gyro.noise_sigma, "gyro 1-sigma noise [rad/s]")->capture_default_str();
   cmd.add_option("--gyro-bias", c.gyro.bias_sigma, "1-sigma of the constant gyro bias [rad/s]")->capture_default_str();

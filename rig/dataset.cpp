@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -435,6 +436,15 @@ DatasetSource::DatasetSource(fs::path dir) : dir_(std::move(dir)) {
     const auto pose_row = [&stretch_start](const std::vector<double>& r) -> std::string {
       const double norm = Eigen::Vector4d(r[4], r[5], r[6], r[7]).norm();
       if (std::abs(norm - 1.0) > 1e-3) return "the quaternion qw qx qy qz has norm " + std::to_string(norm) + ", not 1";
+      // a ground vehicle stands upright: its z axis within 60 degrees of up (roll or pitch beyond
+      // that would be a rolled-over robot, or a quaternion in another order)
+      const Vector3 up = Eigen::Quaterniond(r[4], r[5], r[6], r[7]).normalized() * Vector3::UnitZ();
+      if (up.z() < 0.5) {
+        const double degrees = std::acos(std::clamp(up.z(), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+        return "the vehicle is tilted " + std::to_string(std::lround(degrees)) +
+               " degrees from upright (at most 60: roll or pitch of a ground vehicle; is the quaternion in the order "
+               "qw qx qy qz?)";
+      }
       const Eigen::Vector2d at(r[1], r[2]);
       if (!stretch_start) stretch_start = at;
       const Eigen::Vector2d moved = at - *stretch_start;

@@ -127,6 +127,9 @@ TEST(DatasetTest, MalformedCsvIsNamedWithItsLine) {
   EXPECT_NO_THROW(DatasetSource(dir / "ds"));
   refused("poses_gt.csv", "0,0,0,0,1,0,0,0\n0.1,0.6,0,0,1,0,0,0\n0.2,0.9,0,0,0,0,0,1\n0.3,1.2,0,0,0,0,0,1\n",
           "poses_gt.csv:5: the vehicle drives backwards");
+  // rolled 90 degrees about its x axis (qw = qx = 0.7071): the vehicle is on its side
+  refused("poses_gt.csv", "0,0,0,0,1,0,0,0\n0.1,0.3,0,0,0.70710678,0.70710678,0,0\n",
+          "poses_gt.csv:3: the vehicle is tilted 90 degrees from upright");
 }
 
 // a laser table of 16 lasers, enough for a dataset to load
