@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -469,9 +470,34 @@ double perSecond(const benchmark::BenchmarkReporter::Run& r) {
   return it == r.counters.end() ? 0.0 : static_cast<double>(it->second);
 }
 
+// The summary: one row per figure, printed as a table and, with --markdown=FILE, written as a
+// Markdown table.
+struct Row {
+  std::string figure, median, target, ratio;
+};
+
+std::string format(const char* fmt, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, fmt, v);
+  return b;
+}
+std::string times(double v) { return v > 0 ? format("%.1fx", v) : ""; }
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --markdown=FILE is ours; the rest is Google Benchmark's
+  std::string markdown;
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.rfind("--markdown=", 0) == 0) {
+      markdown = a.substr(11);
+    } else {
+      argv[kept++] = argv[i];
+    }
+  }
+  argc = kept;
   benchmark::Initialize(&argc, argv);
   Collector c;
   benchmark::RunSpecifiedBenchmarks(&c);
@@ -481,94 +507,91 @@ int main(int argc, char** argv) {
     }
     return nullptr;
   };
-  std::printf("\n%-44s %14s %16s %12s\n", "figure", "median", "target", "vs baseline");
+  std::vector<Row> rows;
+  const auto count = [](const benchmark::BenchmarkReporter::Run& r, const char* name) {
+    return std::to_string(static_cast<long>(r.counters.at(name)));
+  };
   const auto* ref = get("BM_LidarRays_MjRay");
   for (const char* name : {"BM_LidarRays_Accelerated/1/", "BM_LidarRays_Accelerated/2/"}) {
     if (const auto* r = get(name)) {
-      std::printf("%-44s %10.0f k/s %16s %11.1fx\n", (std::string("lidar rays, ") + name[25] + " thread(s)").c_str(),
-                  perSecond(*r) / 1e3, ">= 1333 k/s", ref ? perSecond(*r) / perSecond(*ref) : 0.0);
+      rows.push_back({std::string("lidar rays, ") + name[25] + " thread(s)", format("%.0f k/s", perSecond(*r) / 1e3),
+                      ">= 1333 k/s", times(ref ? perSecond(*r) / perSecond(*ref) : 0.0)});
     }
   }
   if (ref)
-    std::printf("%-44s %10.0f k/s %16s %12s\n", "lidar rays, brute-force mj_ray (baseline)", perSecond(*ref) / 1e3, "",
-                "1.0x");
+    rows.push_back(
+        {"lidar rays, brute-force mj_ray (baseline)", format("%.0f k/s", perSecond(*ref) / 1e3), "", "1.0x"});
   const auto* naive = get("BM_Segmentation_NaiveHashMap");
   if (const auto* r = get("BM_Segmentation/0")) {
-    std::printf(
-        "%-44s %11.1f ms %16s %11.1fx\n",
-        ("segmentation ICM (one call), " + std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels")
-            .c_str(),
-        ms(*r), "<= 50 ms", naive ? ms(*naive) / ms(*r) : 0.0);
-    std::printf("%-44s %11.1f B %16s %12s\n", "voxel map memory per voxel",
-                static_cast<double>(r->counters.at("bytes_per_voxel")), "<= 64 B", "");
+    rows.push_back({"segmentation ICM (one call), " + count(*r, "voxels") + " voxels", format("%.1f ms", ms(*r)),
+                    "<= 50 ms", times(naive ? ms(*naive) / ms(*r) : 0.0)});
+    rows.push_back({"voxel map memory per voxel",
+                    format("%.1f B", static_cast<double>(r->counters.at("bytes_per_voxel"))), "<= 64 B", ""});
   }
   if (const auto* r = get("BM_Segmentation/1"))
-    std::printf("%-44s %11.1f ms %16s %11.1fx\n", "segmentation min-cut, same map", ms(*r), "<= 250 ms",
-                naive ? ms(*naive) / ms(*r) : 0.0);
-  if (naive)
-    std::printf("%-44s %11.1f ms %16s %12s\n", "segmentation, naive hash map (baseline)", ms(*naive), "", "1.0x");
-  if (const auto* r = get("BM_SegmentationIncremental")) {
-    std::printf(
-        "%-44s %11.1f ms %16s %12s\n",
-        ("incremental update, " + std::to_string(static_cast<long>(r->counters.at("new_voxels"))) + " new voxels")
-            .c_str(),
-        ms(*r), "<= 10 ms", "");
-  }
+    rows.push_back({"segmentation min-cut, same map", format("%.1f ms", ms(*r)), "<= 250 ms",
+                    times(naive ? ms(*naive) / ms(*r) : 0.0)});
+  if (naive) rows.push_back({"segmentation, naive hash map (baseline)", format("%.1f ms", ms(*naive)), "", "1.0x"});
+  if (const auto* r = get("BM_SegmentationIncremental"))
+    rows.push_back(
+        {"incremental update, " + count(*r, "new_voxels") + " new voxels", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
   if (const auto* r = get("BM_VoxelInsert/1/")) {
     const auto* base = get("BM_VoxelInsert/0/");
-    std::printf(
-        "%-44s %11.2f ms %16s %11.1fx\n",
-        ("voxel insertion, one sweep of " + std::to_string(static_cast<long>(r->counters.at("points"))) + " points")
-            .c_str(),
-        ms(*r), "", base ? ms(*base) / ms(*r) : 0.0);
+    rows.push_back({"voxel insertion, one sweep of " + count(*r, "points") + " points", format("%.2f ms", ms(*r)), "",
+                    times(base ? ms(*base) / ms(*r) : 0.0)});
     if (base)
-      std::printf("%-44s %11.2f ms %16s %12s\n", "voxel insertion, std::unordered_map (baseline)", ms(*base), "",
-                  "1.0x");
+      rows.push_back({"voxel insertion, std::unordered_map (baseline)", format("%.2f ms", ms(*base)), "", "1.0x"});
   }
   if (const auto* r = get("BM_CameraRender"))
-    std::printf("%-44s %10.1f f/s %16s %12s\n", "camera 640x480 (RGB, depth, segmentation)", perSecond(*r), ">= 10 f/s",
-                "");
-  if (const auto* r = get("BM_CameraRig")) {
-    std::printf(
-        "%-44s %10.1f f/s %16s %12s\n",
-        ("camera rig, " + std::to_string(static_cast<int>(r->counters.at("cameras"))) + " cameras at 640x480").c_str(),
-        perSecond(*r), "", "");
-  }
+    rows.push_back({"camera 640x480 (RGB, depth, segmentation)", format("%.1f f/s", perSecond(*r)), ">= 10 f/s", ""});
+  if (const auto* r = get("BM_CameraRig"))
+    rows.push_back(
+        {"camera rig, " + count(*r, "cameras") + " cameras at 640x480", format("%.1f f/s", perSecond(*r)), "", ""});
   if (const auto* r = get("BM_PipelineStreaming")) {
-    std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (median)",
-                static_cast<double>(r->counters.at("frame_median_ms")), "<= 100 ms", "");
-    std::printf("%-44s %11.1f ms %16s %12s\n", "whole pipeline per frame, streaming (p95)",
-                static_cast<double>(r->counters.at("frame_p95_ms")), "", "");
+    rows.push_back({"whole pipeline per frame, streaming (median)",
+                    format("%.1f ms", static_cast<double>(r->counters.at("frame_median_ms"))), "<= 100 ms", ""});
+    rows.push_back({"whole pipeline per frame, streaming (p95)",
+                    format("%.1f ms", static_cast<double>(r->counters.at("frame_p95_ms"))), "", ""});
   }
   if (const auto* r = get("BM_KittiScanMorphologicalFilter/0/")) {
     const auto* pcl = get("BM_KittiScanMorphologicalFilter/1/");
-    std::printf("%-44s %11.1f ms %16s %11.1fx\n", "one real KITTI scan, morphological filter", ms(*r), "",
-                pcl ? ms(*pcl) / ms(*r) : 0.0);
-    if (pcl) std::printf("%-44s %11.1f ms %16s %12s\n", "the same by PCL's octree (baseline)", ms(*pcl), "", "1.0x");
+    rows.push_back({"one real KITTI scan, morphological filter", format("%.1f ms", ms(*r)), "",
+                    times(pcl ? ms(*pcl) / ms(*r) : 0.0)});
+    if (pcl) rows.push_back({"the same by PCL's octree (baseline)", format("%.1f ms", ms(*pcl)), "", "1.0x"});
   }
   if (const auto* r = get("BM_PacketDecode")) {
     // the real sensor sends 20,833 firings/s, 6 a packet
-    std::printf("%-44s %10.0f k/s %16s %11.1fx\n", "HDL-64E packets decoded into sweeps", perSecond(*r) / 1e3,
-                ">= 3.5 k/s", perSecond(*r) / (20833.3 / 6));
+    rows.push_back({"HDL-64E packets decoded into sweeps", format("%.0f k/s", perSecond(*r) / 1e3), ">= 3.5 k/s",
+                    times(perSecond(*r) / (20833.3 / 6))});
   }
   if (const auto* r = get("BM_LongRunMemory"); r && r->counters.count("voxels")) {
-    std::printf("%-44s %11.1f B %16s %12s\n",
-                ("1000 frames: resident memory per added voxel (" +
-                 std::to_string(static_cast<long>(r->counters.at("voxels"))) + " voxels)")
-                    .c_str(),
-                static_cast<double>(r->counters.at("bytes_per_added_voxel")), "", "");
-    std::printf("%-44s %11.2f MB %15s %12s\n",
-                ("1000 frames: growth over the last 300, " +
-                 std::to_string(static_cast<long>(r->counters.at("standing_new_voxels"))) + " new voxels")
-                    .c_str(),
-                static_cast<double>(r->counters.at("standing_growth_mb")), "only with voxels", "");
-    std::printf("%-44s %5.1f / %4.1f ms %16s %12s\n", "1000 frames: estimation, first / last 100",
-                static_cast<double>(r->counters.at("estimation_first100_ms")),
-                static_cast<double>(r->counters.at("estimation_last100_ms")), "", "");
+    rows.push_back({"1000 frames: resident memory per added voxel (" + count(*r, "voxels") + " voxels)",
+                    format("%.1f B", static_cast<double>(r->counters.at("bytes_per_added_voxel"))), "", ""});
+    rows.push_back({"1000 frames: growth over the last 300, " + count(*r, "standing_new_voxels") + " new voxels",
+                    format("%.2f MB", static_cast<double>(r->counters.at("standing_growth_mb"))), "only with voxels",
+                    ""});
+    rows.push_back({"1000 frames: estimation, first / last 100",
+                    format("%.1f", static_cast<double>(r->counters.at("estimation_first100_ms"))) + " / " +
+                        format("%.1f ms", static_cast<double>(r->counters.at("estimation_last100_ms"))),
+                    "", ""});
   }
   if (const auto* r = get("BM_KittiScanSegmentation/0"))
-    std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation, ICM", ms(*r), "<= 10 ms", "");
+    rows.push_back({"KITTI scan 000000 segmentation, ICM", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
   if (const auto* r = get("BM_KittiScanSegmentation/1"))
-    std::printf("%-44s %11.1f ms %16s %12s\n", "KITTI scan 000000 segmentation, min-cut", ms(*r), "<= 10 ms", "");
+    rows.push_back({"KITTI scan 000000 segmentation, min-cut", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
+
+  std::printf("\n%-60s %16s %16s %12s\n", "figure", "median", "target", "vs baseline");
+  for (const Row& r : rows)
+    std::printf("%-60s %16s %16s %12s\n", r.figure.c_str(), r.median.c_str(), r.target.c_str(), r.ratio.c_str());
+  if (!markdown.empty()) {
+    std::ofstream out(markdown);
+    out << "| figure | median | target | vs baseline |\n| --- | --- | --- | --- |\n";
+    for (const Row& r : rows)
+      out << "| " << r.figure << " | " << r.median << " | " << r.target << " | " << r.ratio << " |\n";
+    if (!out.good()) {
+      std::fprintf(stderr, "terrain_bench: error: cannot write %s\n", markdown.c_str());
+      return 2;
+    }
+  }
   return 0;
 }
