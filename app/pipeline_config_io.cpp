@@ -129,6 +129,7 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("crown.max_width_to_depth", c.crown.max_width_to_depth, closed(0, 10));
   v.flag("crown.one_sided", c.crown.one_sided);
   v.flag("crown.sky_guard", c.crown.sky_guard);
+  v.flag("crown.guard_estimates", c.crown.guard_estimates);
   v.number("crown.guard_cell", c.crown.guard_cell, closed(0.1, 5, "m"));
   v.flag("crown.cut_off_tops", c.crown.cut_off_tops);
   v.number("crown.cut_off_quantile", c.crown.cut_off_quantile, closed(0, 1));

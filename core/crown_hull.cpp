@@ -167,7 +167,8 @@ CrownHullConfig skyGuardHull(const CrownConfig& crown, const BoundaryEstimationC
   CrownHullConfig cfg;
   cfg.enabled = true;
   cfg.cell = cfg.layer = crown.guard_cell;
-  cfg.max_radius = crown.max_radius;
+  // the caps' guard needs the air around each crown; the estimates' only the trunks' own columns
+  cfg.max_radius = crown.sky_guard ? crown.max_radius : 0.5 * crown.max_grown_width + crown.guard_cell;
   cfg.max_distance = CrownSampler::ownersReach(crown, estimation);
   return cfg;
 }
@@ -186,6 +187,49 @@ bool CrownHull::skyThrough(double x, double y, double lo, double hi, const Crown
     if (v.sky == 0 || v.foliage > v.sky) return false;
   }
   return true;
+}
+
+int lowerUnderSky(TerrainMesh& mesh, const VoxelMap& map, const CrownHull& hull, const CrownHullConfig& cfg,
+                  const CrownConfig& crown) {
+  if (hull.columns() == 0) return 0;
+  // the trunks' vertices: a wall's edge shares a hull column with the air beside it
+  const MeshObjects objects = findMeshObjects(mesh, map);
+  std::vector<std::uint8_t> trunk(static_cast<std::size_t>(objects.count), 0);
+  for (const Trunk& t : findTrunks(mesh, map, objects, std::max(crown.max_trunk_width, crown.max_grown_width)))
+    trunk[static_cast<std::size_t>(t.object)] = 1;
+  int lowered = 0;
+  auto& vertices = mesh.vertices();
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    MeshVertex& m = vertices[i];
+    const std::int32_t object = objects.of[i];
+    if (!m.raised() || object < 0 || !trunk[static_cast<std::size_t>(object)]) continue;
+    const Point3 c = map.centreOf(VoxelIndex(m.cell.x(), m.cell.y(), 0));
+    const double floor = hull.skyFloor(c.x(), c.y(), m.recovered_height, cfg);
+    if (m.recovered_height - floor > cfg.layer) {
+      m.recovered_height = std::max(m.sensed_height, static_cast<float>(floor));
+      ++lowered;
+    }
+  }
+  return lowered;
+}
+
+double CrownHull::skyFloor(double x, double y, double from, const CrownHullConfig& cfg) const {
+  const auto it = index_.find(key(cellOf(x, cfg.cell), cellOf(y, cfg.cell)));
+  if (it == index_.end() || columns_[it->second].layers.empty()) return from;
+  const Column& col = columns_[it->second];
+  // a voxel whose centre two sky pixels' rays passed is free, whatever other rays met before it
+  const auto sky = [&](int j) { return col.layers[static_cast<std::size_t>(j)].sky >= 2; };
+  int j =
+      std::min(static_cast<int>(col.layers.size()) - 1, static_cast<int>(std::floor((from - col.bottom) / cfg.layer)));
+  // layers no image saw say nothing: the walk starts at the highest one seen
+  const auto unseen = [&](int k) {
+    const Votes& v = col.layers[static_cast<std::size_t>(k)];
+    return v.sky == 0 && v.foliage == 0 && v.other == 0;
+  };
+  while (j >= 0 && unseen(j)) --j;
+  if (j < 0 || !sky(j)) return from;
+  while (j > 0 && sky(j - 1)) --j;
+  return std::min(from, col.bottom + j * cfg.layer);
 }
 
 int CrownHull::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownHullConfig& cfg,

@@ -78,6 +78,14 @@ class CrownHull {
   // least once and no more often as foliage? False where no column was voted on there.
   bool skyThrough(double x, double y, double lo, double hi, const CrownHullConfig& config) const;
 
+  // [m] How far down the sky showed through the column of (x, y) [m] without a break, from the
+  // highest layer any image saw at or below `from` [m] (layers no image saw say nothing): the floor
+  // of the lowest layer of that unbroken run, each one whose centre at least two sky pixels' rays
+  // passed (whatever other rays met before it: from below, a voxel above a crown is often seen
+  // through other crowns). `from` itself where that first layer is not such a layer or no column
+  // was voted on there.
+  double skyFloor(double x, double y, double from, const CrownHullConfig& config) const;
+
   std::size_t columns() const { return columns_.size(); }
   // voxels judged crown (at apply's thresholds)
   std::size_t crownVoxels(const CrownHullConfig& config) const;
@@ -109,10 +117,19 @@ class CrownHull {
   std::size_t horizon_mesh_ = 0;
 };
 
-// The hull that crown completion's sky guard votes on (CrownConfig::sky_guard): voxels of
-// crown.guard_cell around every trunk within a crown's radius, out to where crown completion
-// measures trunks (CrownSampler::ownersReach), up to the hull's default height. Only its sky votes
-// are read (skyThrough).
+// The hull that crown completion's sky guard votes on (CrownConfig::sky_guard and
+// guard_estimates): voxels of crown.guard_cell around every trunk, out to where crown completion
+// measures trunks (CrownSampler::ownersReach), up to the hull's default height; around each trunk
+// within a crown's radius for the caps' guard (sky_guard), else within half the widest trunk
+// (max_grown_width) and a cell. Only its sky votes are read (skyThrough, skyFloor).
 CrownHullConfig skyGuardHull(const CrownConfig& crown, const BoundaryEstimationConfig& estimation);
+
+// The guard on boundary estimation's results (CrownConfig::guard_estimates): every raised vertex of
+// a trunk (an object no wider than crown.max_grown_width either way) whose recovered height lies
+// more than a layer above the hull's skyFloor of its column is lowered to that floor (never below
+// its sensed height). Other objects are left alone: a wall's edge shares a hull column with the air
+// beside it. Returns the number of vertices lowered.
+int lowerUnderSky(TerrainMesh& mesh, const VoxelMap& map, const CrownHull& hull, const CrownHullConfig& config,
+                  const CrownConfig& crown);
 
 }  // namespace terrain

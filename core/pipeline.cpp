@@ -110,6 +110,11 @@ void Pipeline::finish() {
   spreadEstimates(mesh_, map_, config_.estimation);
   completeFootprints();
   const CrownHullConfig guard = skyGuardHull(config_.crown, config_.estimation);
+  // the sky guard bounds what boundary estimation raised on trunks: a trunk's vertex stands no
+  // higher than where the sky showed through its column without a break from above (a top edge
+  // taken from a nearer crown, or one behind, that the clear line did not know)
+  if (config_.crown.enabled && config_.crown.guard_estimates)
+    lowerUnderSky(mesh_, map_, sky_guard_, guard, config_.crown);
   crowns_.apply(mesh_, map_, config_.crown,
                 [&](double x, double y, double lo, double hi) { return sky_guard_.skyThrough(x, y, lo, hi, guard); });
   hull_raised_ = hull_.apply(mesh_, map_, config_.hull, config_.crown);
@@ -263,7 +268,7 @@ void Pipeline::processReady(const SensorFrame& frame) {
     projected += stats.projected;
     if (owners) owners->refreshTops(mesh_);
     crowns_.measure(mesh_, map_, rgb, k, view.world_from_camera, config_.crown, config_.estimation, shared);
-    if (owners && config_.crown.enabled && config_.crown.sky_guard)
+    if (owners && config_.crown.enabled && (config_.crown.sky_guard || config_.crown.guard_estimates))
       sky_guard_.carve(mesh_, map_, rgb, k, view.world_from_camera, *owners,
                        skyGuardHull(config_.crown, config_.estimation), config_.crown, config_.estimation);
     if (owners)

@@ -108,7 +108,7 @@ class Pipeline {
   std::vector<RoofCell> roof_cells_;
   CrownSampler crowns_;                        // crown samples, frame by frame
   CrownHull hull_;                             // the crowns' visual hull, frame by frame
-  CrownHull sky_guard_;                        // crown completion's sky guard (crown.sky_guard)
+  CrownHull sky_guard_;                        // crown completion's sky guard (crown.sky_guard, crown.guard_estimates)
   SkyCeiling ceiling_;                         // the sky's rays, frame by frame
   IncrementalGroundSegmentation incremental_;  // frame by frame
   struct HeldFrame {

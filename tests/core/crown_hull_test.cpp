@@ -148,13 +148,19 @@ TEST(CrownHullTest, SkyAndGrassMakeNoCrown) {
 TEST(CrownHullTest, TheSkyShowsThroughTheAirBesideACrownNotThroughIt) {
   Roadside tree;
   CrownHull hull;
-  const CrownConfig crown;
+  CrownConfig crown;
+  crown.sky_guard = true;
   const BoundaryEstimationConfig estimation;
   const CrownHullConfig cfg = skyGuardHull(crown, estimation);
   EXPECT_TRUE(cfg.enabled);
   EXPECT_EQ(cfg.cell, crown.guard_cell);
   EXPECT_EQ(cfg.layer, crown.guard_cell);
+  EXPECT_EQ(cfg.max_radius, crown.max_radius);
   EXPECT_EQ(cfg.max_distance, CrownSampler::ownersReach(crown, estimation));
+  // the estimates' guard alone needs only the trunks' own columns
+  crown.sky_guard = false;
+  crown.guard_estimates = true;
+  EXPECT_EQ(skyGuardHull(crown, estimation).max_radius, 0.5 * crown.max_grown_width + crown.guard_cell);
   tree.drive(hull, along(-8, 8, 0.5), cfg);
   EXPECT_GT(hull.columns(), 0u);
   // the crown's column from its equator (9 m) to its top (11.5 m), and half way out
@@ -166,6 +172,55 @@ TEST(CrownHullTest, TheSkyShowsThroughTheAirBesideACrownNotThroughIt) {
   EXPECT_TRUE(hull.skyThrough(0.1, 10.1, 13.0, 13.9, cfg));
   // outside every column (more than max_radius from the trunk)
   EXPECT_FALSE(hull.skyThrough(12.1, 10.1, 9.0, 11.5, cfg));
+}
+
+// How far down the sky shows through a column without a break: over the crown to its top, beside
+// it to below its equator; inside the crown, or where no column was voted on, not at all.
+TEST(CrownHullTest, TheSkyFloorOverACrownIsItsTop) {
+  Roadside tree;
+  CrownHull hull;
+  CrownConfig crown;
+  crown.sky_guard = true;  // columns out to a crown's radius, for the test beside it
+  const CrownHullConfig cfg = skyGuardHull(crown, BoundaryEstimationConfig{});
+  tree.drive(hull, along(-8, 8, 0.5), cfg);
+  // from 13.5 m over the trunk: down to within a layer of the crown's top (11.5 m)
+  const double over = hull.skyFloor(0.1, 10.1, 13.5, cfg);
+  EXPECT_GE(over, 11.0);
+  EXPECT_LE(over, 12.5);
+  // from above the column (30 m) or its layers no image saw (past the cameras' 50 degrees up from
+  // this short stretch of road): the same
+  EXPECT_EQ(hull.skyFloor(0.1, 10.1, 40.0, cfg), over);
+  EXPECT_EQ(hull.skyFloor(0.1, 10.1, 20.0, cfg), over);
+  EXPECT_EQ(hull.skyFloor(0.1, 10.1, 10.5, cfg), 10.5);   // inside the crown
+  EXPECT_LT(hull.skyFloor(4.1, 10.1, 11.0, cfg), 9.0);    // beside it
+  EXPECT_EQ(hull.skyFloor(12.1, 10.1, 10.0, cfg), 10.0);  // no column there
+}
+
+// A trunk raised tens of metres too high (a top edge of something nearer, taken at its depth) is
+// lowered to where the sky shows through its column from above, near its crown's top; a trunk
+// raised to its crown's top, and ground raised under the crown, are left as they are.
+TEST(CrownHullTest, TheGuardLowersAnEstimateTheSkyShowsThrough) {
+  Roadside tree;
+  CrownHull hull;
+  CrownConfig crown;
+  crown.guard_estimates = true;
+  const CrownHullConfig cfg = skyGuardHull(crown, BoundaryEstimationConfig{});
+  tree.drive(hull, along(-8, 8, 0.5), cfg);
+  const auto raise = [&](int x, int y, float h) {
+    MeshVertex& m = tree.mesh.vertices()[tree.mesh.find(CellIndex(x, y))];
+    m.spread = true;
+    m.recovered_height = h;
+  };
+  raise(0, 50, 40.0f);  // the trunk
+  raise(1, 50, 11.5f);  // the ground beside it, under the crown
+  EXPECT_EQ(lowerUnderSky(tree.mesh, tree.map, hull, cfg, crown), 1);
+  EXPECT_GE(tree.at(0, 50).height(), 11.0);
+  EXPECT_LE(tree.at(0, 50).height(), 12.5);
+  EXPECT_EQ(tree.at(1, 50).height(), 11.5f);
+  // at its crown's top already: within a layer of the floor, left alone
+  raise(0, 50, 11.8f);
+  EXPECT_EQ(lowerUnderSky(tree.mesh, tree.map, hull, cfg, crown), 0);
+  EXPECT_EQ(tree.at(0, 50).height(), 11.8f);
 }
 
 TEST(CrownHullTest, OffItTakesNoVote) {
