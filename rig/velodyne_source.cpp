@@ -132,8 +132,6 @@ VelodyneLidar::VelodyneLidar(const LidarEndpoint& endpoint, LaserCalibration cal
                                            std::vector<std::uint16_t>{endpoint_.port, velodyne::kPositionPort});
   } else {
     udp_ = std::make_unique<UdpReceiver>(endpoint_.host, endpoint_.port);
-    if (options_.position_port != 0 && options_.position_port != endpoint_.port)
-      position_udp_ = std::make_unique<UdpReceiver>(endpoint_.host, options_.position_port);
     buffer_.resize(65536);  // the largest UDP datagram
   }
 }

@@ -69,8 +69,9 @@ struct VelodyneOptions {
   velodyne::DecoderOptions decoder;
   double idle_timeout = 2.0;    // [s] a live stream ends after this long without a packet (once one came)
   double first_timeout = 30.0;  // [s] no packet within this long is an error
-  // a live source: the UDP port its position packets (GPS) come to, on the data socket's address,
-  // read as data packets arrive (0: none are read, as beside another source of GPS)
+  // a live sensor reconstructed alone (CaptureSource's live constructor): the UDP port its
+  // position packets (GPS) come to, on the data socket's address, read as data packets arrive
+  // (0: none are read)
   std::uint16_t position_port = 0;
 };
 
@@ -88,7 +89,7 @@ struct PositionStats {
 };
 
 // Sweeps from a live sensor or a capture. Position packets become GPS fixes on the data packets'
-// clock (takeFixes): a capture's, and a live source's when it listens on a position port.
+// clock (takeFixes): a capture's, and a live source's when it was handed a position socket.
 //
 // Failures (io::InputError, naming the source): packets of another model than the calibration's
 // (the calibration says 64 lasers, the packets are an HDL-32E's); no packet within first_timeout
