@@ -56,7 +56,7 @@ class ReconstructCommand : public Command {
             "give --input DATASET, or --lidar pcap:FILE (a capture) or udp:HOST:PORT (a live sensor) to reconstruct "
             "it alone");
       }
-      lidar_.options.position_port = static_cast<std::uint16_t>(position_port_);
+      lidar_.position_port = static_cast<std::uint16_t>(position_port_);
       reconstructCapture(lidar_, config_, out_, force_, scoring_, sensors_);
       return 0;
     }

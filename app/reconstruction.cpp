@@ -241,11 +241,12 @@ nlohmann::json reconstructCapture(const LidarChoice& lidar_choice, const Pipelin
   capture.calibration = lidar_choice.calibration;
   capture.time_base = parseTimeBase(lidar_choice.time_base, "--lidar-time-base");
   capture.lidar = lidar_choice.options;
+  capture.position_port = lidar_choice.position_port;
   std::shared_ptr<const rig::SensorFolder> sensors;
   if (!sensors_dir.empty()) sensors = std::make_shared<rig::SensorFolder>(sensors_dir);
   if (live) {
     std::cerr << "reconstruct: listening for lidar packets on " << endpoint.describe();
-    if (capture.lidar.position_port != 0) std::cerr << " and position packets on port " << capture.lidar.position_port;
+    if (capture.position_port != 0) std::cerr << " and position packets on port " << capture.position_port;
     std::cerr << "\n";
   } else {
     refuseInputInside(out, endpoint.path, "--lidar");

@@ -25,6 +25,8 @@ struct LidarChoice {
   std::string time_base = "auto";
   bool strict = false;       // a cut-off capture is an error
   double mast_height = 1.8;  // [m] a capture reconstructed alone: lidar above the ground
+  // a live sensor reconstructed alone: the port of its position packets (0: none are read)
+  std::uint16_t position_port = rig::velodyne::kPositionPort;
   rig::VelodyneOptions options;
 };
 

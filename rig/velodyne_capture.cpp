@@ -210,9 +210,9 @@ CaptureSource::CaptureSource(const LidarEndpoint& live, const CaptureOptions& op
   const std::string where = live.describe();
   auto data = std::make_unique<UdpReceiver>(live.host, live.port);
   std::unique_ptr<UdpReceiver> position;
-  if (options.lidar.position_port != 0 && options.lidar.position_port != live.port) {
+  if (options.position_port != 0 && options.position_port != live.port) {
     try {
-      position = std::make_unique<UdpReceiver>(live.host, options.lidar.position_port);
+      position = std::make_unique<UdpReceiver>(live.host, options.position_port);
     } catch (const io::InputError& e) {
       throw io::InputError(std::string(e.what()) + " (the position packets, GPS; --lidar-position-port 0 reads none)");
     }

@@ -56,6 +56,9 @@ struct CaptureOptions {
   std::filesystem::path calibration;  // empty: the shipped table of the capture's model
   std::optional<double> time_base;    // given: used as is; else from the GPS, else the capture clock
   VelodyneOptions lidar;              // decoder ranges (its time_base is set from the above)
+  // a live sensor (CaptureSource's live constructor): the UDP port its position packets (GPS) come
+  // to, on the data socket's address, read as data packets arrive (0: none are read)
+  std::uint16_t position_port = velodyne::kPositionPort;
 };
 
 // The time base of a capture (GPS when its position packets hold a valid RMC sentence, else the
@@ -89,7 +92,7 @@ CaptureScan scanCapture(const std::filesystem::path& path, const CaptureOptions&
 // stands, heading east).
 //
 // Live (udp:HOST:PORT), the same from a sensor on the network, with no sensor folder: the data port
-// is bound, and options.lidar.position_port unless 0; the first data packet of a known model (within
+// is bound, and options.position_port unless 0; the first data packet of a known model (within
 // options.lidar.first_timeout) gives the model and so the laser table (the given one must fit it),
 // and the time base when none is given (the top of the hour that puts that packet nearest to the
 // host clock: setup().time_base_source "host clock"). The constructor then reads sweeps until a

@@ -69,10 +69,6 @@ struct VelodyneOptions {
   velodyne::DecoderOptions decoder;
   double idle_timeout = 2.0;    // [s] a live stream ends after this long without a packet (once one came)
   double first_timeout = 30.0;  // [s] no packet within this long is an error
-  // a live sensor reconstructed alone (CaptureSource's live constructor): the UDP port its
-  // position packets (GPS) come to, on the data socket's address, read as data packets arrive
-  // (0: none are read)
-  std::uint16_t position_port = 0;
 };
 
 // What the position packets (port 8308) of a capture held.

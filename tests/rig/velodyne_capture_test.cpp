@@ -385,7 +385,7 @@ TEST(VelodyneCaptureTest, ALiveSensorAloneFindsItsModelAndTakesItsGpsFromItsPosi
     }
   });
   CaptureOptions options;
-  options.lidar.position_port = position_port;
+  options.position_port = position_port;
   options.lidar.first_timeout = 10;
   options.lidar.idle_timeout = 0.5;
   LidarEndpoint live = LidarEndpoint::parse("udp:127.0.0.1:" + std::to_string(data_port));
