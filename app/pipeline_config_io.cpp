@@ -133,6 +133,7 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("crown.guard_cell", c.crown.guard_cell, closed(0.1, 5, "m"));
   v.flag("crown.cut_off_tops", c.crown.cut_off_tops);
   v.number("crown.cut_off_quantile", c.crown.cut_off_quantile, closed(0, 1));
+  v.number("crown.radius_quantile", c.crown.radius_quantile, closed(0, 1));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);
   v.number("hull.cell", c.hull.cell, closed(0.05, 5, "m"));

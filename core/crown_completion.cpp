@@ -9,6 +9,16 @@
 
 namespace terrain {
 
+namespace {
+
+// the element at quantile q (clamped to [0, 1]) of a sorted, non-empty list: index floor(q n)
+float quantile(const std::vector<float>& sorted, double q) {
+  const double at = std::clamp(q, 0.0, 1.0) * static_cast<double>(sorted.size());
+  return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(at))];
+}
+
+}  // namespace
+
 double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map) {
   const auto& vertices = mesh.vertices();
   const int ring = static_cast<int>(std::ceil(1.0 / map.voxelSize()));
@@ -440,7 +450,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       // lie within max_top_spread (a share of the lowest one's height above the ground around the
       // trunk, or above the trunk's sensed top where no ground is near) above the group's lowest,
       // the lowest group with min_samples samples whose cameras spread min_baseline gives the crown:
-      // its median top, and the lower quartile of its radii (a run widened by a crown beside it
+      // its median top, and the radius_quantile of its radii (a run widened by a crown beside it
       // errs only upwards).
       std::vector<const Sample*> by_top = samples;
       std::stable_sort(by_top.begin(), by_top.end(), [](const Sample* a, const Sample* b) { return a->top < b->top; });
@@ -470,11 +480,11 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       }
       if (tops.empty()) return CrownVerdict::Disagree;
       std::sort(radii.begin(), radii.end());
-      top = tops[tops.size() / 2], r = radii[radii.size() / 4];
+      top = tops[tops.size() / 2], r = quantile(radii, cfg.radius_quantile);
       return r < cfg.min_radius ? CrownVerdict::TooNarrow : CrownVerdict::Raised;
     }();
     // no crown from the samples: the bound samples (each a lower bound on the top) give the top's
-    // cut_off_quantile and the lower quartile of their radii
+    // cut_off_quantile and the radius_quantile of their radii
     const auto fromBounds = [&] {
       if (static_cast<int>(bounds.size()) < min_samples || baseline(bounds) < cfg.min_baseline) return false;
       if (std::isnan(ground)) ground = groundAround(t, mesh, map);
@@ -483,9 +493,8 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       for (const Sample* b : bounds) tops.push_back(b->top), radii.push_back(b->radius);
       std::sort(tops.begin(), tops.end());
       std::sort(radii.begin(), radii.end());
-      const double q = std::clamp(cfg.cut_off_quantile, 0.0, 1.0);
-      top = tops[std::min(tops.size() - 1, static_cast<std::size_t>(q * static_cast<double>(tops.size())))];
-      r = radii[radii.size() / 4];
+      top = quantile(tops, cfg.cut_off_quantile);
+      r = quantile(radii, cfg.radius_quantile);
       return r >= cfg.min_radius;
     };
     CrownVerdict outcome = verdict;

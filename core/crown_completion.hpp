@@ -151,6 +151,10 @@ struct CrownConfig {
   // 10.65 m), with the same terrain cells raised and trees too high; seeds 19-20 did not move.
   bool cut_off_tops = true;
   double cut_off_quantile = 0.5;
+  // The crown's radius is this quantile of its samples' radii (of the agreeing group, or of the
+  // bound samples): a run widened by a crown beside it errs only upwards, one cut short by a
+  // nearer object downwards.
+  double radius_quantile = 0.25;
 };
 
 // A trunk-sized object of the mesh: where it stands and how high the lidar saw it.

@@ -393,6 +393,40 @@ TEST(CrownCompletionTest, ACrownCutOffByTheImageTopIsRaisedToItsBound) {
   }
 }
 
+// A grey post nearer the camera hides the crown's right side from 1.5 m east of the trunk in five
+// frames of eight: those runs give a radius of 1.5 m, the three whole ones 3 m. The lower quartile
+// of the radii (crown.radius_quantile, 0.25 by default) takes the cut ones, and the ground 2 m from
+// the trunk stays ground; the highest (1) takes the whole crown's cap.
+TEST(CrownCompletionTest, TheRadiusIsTheConfiguredQuantileOfTheSamplesRadii) {
+  for (const double q : {0.25, 1.0}) {
+    Tree tree;
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.radius_quantile = q;
+    CrownSampler sampler;
+    const cv::Mat whole = tree.image();
+    cv::Mat cut = whole.clone();
+    const auto edge = project(tree.k, tree.pose.inverse() * Point3(0.1 + 1.5, 20.1, 8.0));
+    ASSERT_TRUE(edge);
+    cv::rectangle(cut, cv::Point(static_cast<int>(edge->x()) + 1, 0), cv::Point(tree.k.width - 1, tree.k.height - 1),
+                  cv::Scalar(150, 150, 150), cv::FILLED);
+    for (const bool hidden : {true, false, true, true, false, true, false, true})
+      EXPECT_EQ(sampler.measure(tree.mesh, tree.map, hidden ? cut : whole, tree.k, tree.pose, cfg,
+                                BoundaryEstimationConfig{}),
+                1)
+          << q;
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0) << q;
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised) << q;
+    EXPECT_NEAR(tree.at(1, 100).height(), 11.0, 0.15) << q;
+    if (q < 0.5) {
+      EXPECT_TRUE(tree.at(6, 100).raised());    // 1.2 m from the trunk
+      EXPECT_FALSE(tree.at(10, 100).raised());  // 2 m
+    } else {
+      tree.expectCap();
+    }
+  }
+}
+
 // A sampler that measured the tree's crown in three frames of its image.
 CrownSampler sampledThrice(const Tree& tree, const CrownConfig& cfg) {
   CrownSampler sampler;
