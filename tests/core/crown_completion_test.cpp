@@ -393,7 +393,7 @@ TEST(CrownCompletionTest, ACrownCutOffByTheImageTopIsRaisedToItsBound) {
   }
 }
 
-// A grey post nearer the camera hides the crown's right side from 1.5 m east of the trunk in five
+// A grey screen nearer the camera hides everything from 1.5 m east of the trunk rightwards in five
 // frames of eight: those runs give a radius of 1.5 m, the three whole ones 3 m. The lower quartile
 // of the radii (crown.radius_quantile, 0.25 by default) takes the cut ones, and the ground 2 m from
 // the trunk stays ground; the highest (1) takes the whole crown's cap.
