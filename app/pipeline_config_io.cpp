@@ -134,6 +134,8 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.flag("crown.cut_off_tops", c.crown.cut_off_tops);
   v.number("crown.cut_off_quantile", c.crown.cut_off_quantile, closed(0, 1));
   v.number("crown.radius_quantile", c.crown.radius_quantile, closed(0, 1));
+  v.flag("crown.axis_ceiling", c.crown.axis_ceiling);
+  v.number("crown.ceiling_halfwidth", c.crown.ceiling_halfwidth, closed(0, 5, "m"));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);
   v.number("hull.cell", c.hull.cell, closed(0.05, 5, "m"));

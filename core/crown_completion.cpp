@@ -184,6 +184,30 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     return static_cast<int>(std::floor(verticals.columnAt(views[i].px, row + 0.5)));
   };
   const auto inside = [&](int u) { return u >= 0 && u < rgb.cols; };
+  // the ray through the vertical of trunk i at `row` (world frame)
+  const auto rayAt = [&](std::size_t i, double row) {
+    return Vector3(world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, row), row)));
+  };
+  // the axis's ceiling over trunk i in this image (CrownConfig::axis_ceiling): the height where the
+  // lowest rising ray above the trunk's top crosses its vertical with the sky on both sides of it;
+  // +inf if none does within the image
+  const auto axisCeiling = [&](std::size_t i) {
+    const Trunk& t = trunks[i];
+    const int half = static_cast<int>(std::ceil(cfg.ceiling_halfwidth * k.fx / views[i].depth));
+    for (int row = views[i].v - 1; row >= 0; --row) {
+      const int u = column(i, row);
+      if (!inside(u - half) || !inside(u + half)) break;
+      bool clear = sky(u, row);
+      for (int du = 1; du <= half && clear; ++du) clear = sky(u - du, row) && sky(u + du, row);
+      if (!clear) continue;
+      const Vector3 dir = rayAt(i, row + 0.5);
+      if (dir.z() <= 0) continue;  // a falling ray may pass beyond the world's edge
+      const double h = heightAbove(centre, dir, t.centre.x(), t.centre.y());
+      // a ray below the trunk's sensed top crossed beside it, not over it
+      return std::isfinite(h) && h > t.top ? h : std::numeric_limits<double>::infinity();
+    }
+    return std::numeric_limits<double>::infinity();
+  };
   int measured = 0;
   for (std::size_t i = 0; i < trunks.size(); ++i) {
     const Trunk& t = trunks[i];
@@ -193,6 +217,10 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     record.key = t.key;
     record.centre = t.centre.cast<float>();
     const auto count = [&record](CrownOutcome o) { countUp(record.outcomes[static_cast<std::size_t>(o)]); };
+    if (cfg.axis_ceiling) {
+      const double ceiling = axisCeiling(i);
+      if (std::isfinite(ceiling)) ceilings_[t.key].push_back(static_cast<float>(ceiling));
+    }
     // the crown's rows on the trunk's vertical, [top, bottom], and its widest run. With the foliage
     // cue a crown above the trunk that a tree nearer the camera owns hides the trunk: the walk goes
     // on up the trunk's vertical above it (within max_trunk_gap of the trunk's sensed top)
@@ -307,9 +335,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       count(*failed);
       continue;
     }
-    const auto along = [&](double row) {  // the ray through the vertical at `row` (world frame)
-      return Vector3(world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, row), row)));
-    };
+    const auto along = [&](double row) { return rayAt(i, row); };
     const Vector3 dir = along(top + 0.5);
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
     double radius = (half + 0.5) * views[i].depth / k.fx;
@@ -344,7 +370,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
 }
 
 int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg, const SkyThrough& sky_through) {
-  if (!cfg.enabled || samples_.empty() || mesh.vertices().empty()) return 0;
+  lowered_ = 0;
+  if (!cfg.enabled || (samples_.empty() && ceilings_.empty()) || mesh.vertices().empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   auto& vertices = mesh.vertices();
   const double cell = map.voxelSize();
@@ -388,21 +415,23 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   std::vector<std::uint32_t> keys;
   for (const auto& [key, list] : samples_) keys.push_back(key);
   std::sort(keys.begin(), keys.end());
+  // the trunk of the key, else the narrow trunk nearest seen_at within 1 m; trunks.size() if none
+  const auto trunkOf = [&](std::uint32_t key, const Eigen::Vector2d& seen_at) {
+    if (const auto own = trunk_of_key.find(key); own != trunk_of_key.end()) return own->second;
+    std::size_t to = trunks.size();
+    double best = 1.0;
+    for (std::size_t i = 0; i < narrow; ++i) {
+      const double d = (trunks[i].centre - seen_at).norm();
+      if (d <= best) best = d, to = i;
+    }
+    return to;
+  };
   std::vector<std::vector<Sample>> merged(trunks.size());
   std::vector<std::vector<std::uint32_t>> merged_keys(trunks.size());
   for (std::uint32_t key : keys) {
     const std::vector<Sample>& list = samples_.at(key);
     const Eigen::Vector2d seen_at = list.back().trunk.cast<double>();
-    std::size_t to = trunks.size();
-    if (const auto own = trunk_of_key.find(key); own != trunk_of_key.end()) {
-      to = own->second;
-    } else {
-      double best = 1.0;
-      for (std::size_t i = 0; i < narrow; ++i) {
-        const double d = (trunks[i].centre - seen_at).norm();
-        if (d <= best) best = d, to = i;
-      }
-    }
+    std::size_t to = trunkOf(key, seen_at);
     if (to == trunks.size()) {
       const std::int32_t o = objectNear(seen_at);
       if (const auto grown = grown_of_object.find(o); grown != grown_of_object.end()) {
@@ -419,6 +448,25 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     merged[to].insert(merged[to].end(), list.begin(), list.end());
     merged_keys[to].push_back(key);
   }
+  // the axis's ceilings go to the trunk of their key, else to the narrow trunk nearest where the
+  // trunk was last seen, within 1 m, else to a grown trunk that took samples there
+  std::vector<std::vector<float>> ceilings(trunks.size());
+  std::vector<std::uint32_t> ceiling_keys;
+  for (const auto& [key, list] : ceilings_) ceiling_keys.push_back(key);
+  std::sort(ceiling_keys.begin(), ceiling_keys.end());
+  for (std::uint32_t key : ceiling_keys) {
+    const auto record = records_.find(key);
+    if (record == records_.end()) continue;
+    const Eigen::Vector2d seen_at = record->second.centre.cast<double>();
+    std::size_t to = trunkOf(key, seen_at);
+    if (to == trunks.size()) {
+      const auto grown = grown_of_object.find(objectNear(seen_at));
+      if (grown == grown_of_object.end()) continue;
+      to = grown->second;
+    }
+    const std::vector<float>& list = ceilings_.at(key);
+    ceilings[to].insert(ceilings[to].end(), list.begin(), list.end());
+  }
   for (std::size_t ti = 0; ti < trunks.size(); ++ti) {
     const Trunk& t = trunks[ti];
     // the samples, and apart from them the bound samples of crowns cut off by the image top
@@ -431,6 +479,27 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       if (const auto record = records_.find(t.key); record != records_.end()) record->second.verdict = v;
     };
     const int min_samples = std::max(1, cfg.min_samples);
+    // the min_samples-th lowest ceiling over the axis: the trunk's vertices (a narrow trunk's: a
+    // grown one may hold a facade fragment beside the axis) and the crown's cap stand no higher
+    double ceiling = std::numeric_limits<double>::infinity();
+    if (static_cast<int>(ceilings[ti].size()) >= min_samples) {
+      std::vector<float>& c = ceilings[ti];
+      std::nth_element(c.begin(), c.begin() + (min_samples - 1), c.end());
+      ceiling = c[static_cast<std::size_t>(min_samples - 1)];
+    }
+    if (std::isfinite(ceiling) && ti < narrow) {
+      for (int y = t.lo.y(); y <= t.hi.y(); ++y) {
+        for (int x = t.lo.x(); x <= t.hi.x(); ++x) {
+          const std::int64_t j = mesh.find(CellIndex(x, y));
+          if (j < 0 || objects.of[j] != t.object) continue;
+          MeshVertex& m = vertices[j];
+          if (m.raised() && m.recovered_height > ceiling) {
+            m.recovered_height = std::max(m.sensed_height, static_cast<float>(ceiling));
+            ++lowered_;
+          }
+        }
+      }
+    }
     // the farthest a camera stood from the first one's
     const auto baseline = [](const std::vector<const Sample*>& list) {
       double b = 0;
@@ -516,6 +585,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       }
     }
     judge(outcome);
+    top = std::min(top, ceiling);
     // the ground vertices (and the trunk's own) within the radius: a spherical cap topped at `top`
     const int reach = static_cast<int>(std::ceil(r / cell));
     const CellIndex c0(static_cast<int>(std::floor(t.centre.x() / cell)),

@@ -155,6 +155,15 @@ struct CrownConfig {
   // bound samples): a run widened by a crown beside it errs only upwards, one cut short by a
   // nearer object downwards.
   double radius_quantile = 0.25;
+  // The axis's ceiling: a sky pixel's ray meets nothing, so where one crosses the vertical through a
+  // trunk the tree stands lower. Each image gives the lowest rising ray over the trunk's top whose
+  // pixels on the vertical's image are sky for ceiling_halfwidth on either side of the vertical (the
+  // trunk's position is known to a cell, and a crown's apex is narrow); the min_samples-th lowest
+  // over the run bounds the trunk's vertices and its crown's cap from above. Unlike the guard's
+  // hull (guard_estimates) it needs no voxel that two rays passed, and reaches a trunk anywhere
+  // crowns are measured.
+  bool axis_ceiling = true;
+  double ceiling_halfwidth = 0.5;  // [m]
 };
 
 // A trunk-sized object of the mesh: where it stands and how high the lidar saw it.
@@ -259,6 +268,8 @@ class CrownSampler {
 
   // trunks with samples
   std::size_t trunks() const { return samples_.size(); }
+  // raised trunk vertices the axis's ceiling lowered in the last apply()
+  int loweredByCeiling() const { return lowered_; }
   // every trunk a frame looked at, by key
   std::vector<CrownRecord> records() const;
   // Replaces the records (a saved run read back); the samples stay as they are.
@@ -274,6 +285,8 @@ class CrownSampler {
   };
   std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id
   std::unordered_map<std::uint32_t, CrownRecord> records_;          // by the same key
+  std::unordered_map<std::uint32_t, std::vector<float>> ceilings_;  // [m] the axis's ceilings, by the same key
+  int lowered_ = 0;
 };
 
 }  // namespace terrain

@@ -20,6 +20,14 @@
 
 namespace terrain::test {
 
+// The robot's body in a test scene's worldbody: its chassis and mast, which the lidar leaves out.
+inline const std::string kRobotBody = R"(    <body name="robot" mocap="true">
+      <geom name="robot_chassis" type="box" size="0.5 0.35 0.2" pos="0 0 0.35" group="3"/>
+      <geom name="robot_mast" type="cylinder" size="0.04 0.8" pos="0 0 1" group="3"/>
+      <camera name="robot_camera" pos="0.1 0 1.6" xyaxes="0 -1 0 0 0 1" fovy="60"/>
+    </body>
+)";
+
 // A flat plane named "ground", one box geom (class building) named `name` with its centre and half
 // sizes [m], and the robot body with its camera, as generated scenes have them; with sky, a
 // gradient skybox of daylight blue (the sky test of boundary estimation passes on it).
@@ -43,12 +51,8 @@ inline std::string boxScene(const std::string& name, const Eigen::Vector3d& cent
     <geom name=")" +
          name + R"(" type="box" pos=")" + v3(centre) + R"(" size=")" + v3(half) +
          R"(" rgba="0.7 0.7 0.7 1" group="1"/>
-    <body name="robot" mocap="true">
-      <geom name="robot_chassis" type="box" size="0.5 0.35 0.2" pos="0 0 0.35" group="3"/>
-      <geom name="robot_mast" type="cylinder" size="0.04 0.8" pos="0 0 1" group="3"/>
-      <camera name="robot_camera" pos="0.1 0 1.6" xyaxes="0 -1 0 0 0 1" fovy="60"/>
-    </body>
-  </worldbody>
+)" + kRobotBody +
+         R"(  </worldbody>
 </mujoco>)";
 }
 

@@ -234,12 +234,18 @@ TEST(CrownCompletionTest, ALargeNearCrownIsMeasuredToItsFullRadius) {
 // top, never lowers it: the lowest group of samples that agree, with enough of them seen from far
 // enough apart, gives the crown. Shifting the crown up by 25 px in the image stands for such frames.
 TEST(CrownCompletionTest, TheLowestGroupOfAgreeingSamplesGivesTheTop) {
-  // samples from the camera moved east by each x [m], with the crown drawn up by the shift [px]
-  const auto sampled = [](Tree& tree, CrownSampler& sampler, const std::vector<std::pair<double, int>>& views) {
+  // samples from the camera moved east by each x [m], with the crown drawn up by the shift [px]. The
+  // images of one case show the crown at different heights, which no one world does: the sky an
+  // unshifted image shows over the trunk's axis would bound the lifted crown, so the axis's ceiling
+  // is left out to judge the samples alone
+  CrownConfig measuring;
+  measuring.axis_ceiling = false;
+  const auto sampled = [&measuring](Tree& tree, CrownSampler& sampler,
+                                    const std::vector<std::pair<double, int>>& views) {
     const Pose start = tree.pose;
     for (const auto& [x, shift] : views) {
       tree.pose.translation().x() = start.translation().x() + x;
-      EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(shift), tree.k, tree.pose, CrownConfig{},
+      EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(shift), tree.k, tree.pose, measuring,
                                 BoundaryEstimationConfig{}),
                 1)
           << x << " m, " << shift << " px";
@@ -424,6 +430,42 @@ TEST(CrownCompletionTest, TheRadiusIsTheConfiguredQuantileOfTheSamplesRadii) {
     } else {
       tree.expectCap();
     }
+  }
+}
+
+// Boundary estimation took a taller crown behind for the trunk's top and raised its vertex to 40 m.
+// Over the trunk the sky shows just above the crown's 11 m top in every frame: with min_samples
+// (3) such frames the axis's ceiling lowers the vertex to the crown's top; with two, or with
+// crown.axis_ceiling off, it stays where estimation put it.
+TEST(CrownCompletionTest, TheSkyOverTheTrunksAxisLowersWhatStandsAboveIt) {
+  for (const int frames : {3, 2, 0}) {
+    Tree tree;
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.axis_ceiling = frames > 0;
+    MeshVertex& trunk = tree.mesh.vertices()[tree.mesh.find(CellIndex(0, 100))];
+    trunk.spread = true;
+    trunk.recovered_height = 40.0f;
+    CrownSampler sampler;
+    // the crown's samples in three frames (its foliage before a facade as against the sky), the sky
+    // over the trunk in `frames` of them
+    for (int frame = 0; frame < 3; ++frame) {
+      const bool facade = frames > 0 && frame >= frames;
+      EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(0, facade), tree.k, tree.pose, cfg,
+                                BoundaryEstimationConfig{}),
+                1)
+          << frames;
+    }
+    sampler.apply(tree.mesh, tree.map, cfg);
+    if (frames == 3) {
+      EXPECT_NEAR(tree.at(0, 100).height(), 11.0, 0.15);
+      EXPECT_EQ(sampler.loweredByCeiling(), 1);
+    } else {
+      EXPECT_FLOAT_EQ(tree.at(0, 100).height(), 40.0f) << frames;
+      EXPECT_EQ(sampler.loweredByCeiling(), 0) << frames;
+    }
+    // the cap under the crown stands as without a ceiling
+    EXPECT_NEAR(tree.at(10, 100).height(), 8.0 + std::sqrt(5.0), 0.2) << frames;
   }
 }
 

@@ -130,6 +130,82 @@ TEST(PipelineTest, ABlockOnlyTheRearCameraSeesGetsItsTrueHeight) {
   EXPECT_LT(blockFaceHeight("forward"), 4.0);
 }
 
+// A tree 14 m left of a drive 8 m long: its trunk (0.3 m in radius) stands 8 m tall under a
+// sphere crown 3 m in radius centred 10 m up, so the lidar (1.8 m up, its highest laser 2 degrees
+// above the horizon) senses the trunk to about 2.3 m and never the crown, and the crown's top
+// (38 degrees up from the left camera) lies within the cameras' view (up to 45.5 degrees). Crown
+// completion raises the ground under the crown from the images alone.
+const Eigen::Vector2d kTreeAt(6, 14);
+constexpr double kCrownRadius = 3, kCrownCentre = 10, kCrownTop = kCrownCentre + kCrownRadius;
+
+std::shared_ptr<sim::World> roadsideTree() {
+  const std::string at = std::to_string(kTreeAt.x()) + " " + std::to_string(kTreeAt.y());
+  const std::string scene = R"(<mujoco>
+  <statistic extent="100" center="0 0 0"/>
+  <visual><global offwidth="320" offheight="240"/><quality offsamples="0"/><map znear="0.002" zfar="3"/></visual>
+  <asset>
+    <texture name="sky" type="skybox" builtin="gradient" rgb1="0.45 0.65 0.95" rgb2="0.7 0.8 1" width="64" height="64"/>
+    <texture name="leaves" type="cube" builtin="flat" mark="random" random="0.35" rgb1="0.13 0.38 0.12" rgb2="0.13 0.38 0.12" markrgb="0.3 0.55 0.2" width="64" height="64"/>
+    <material name="leaves" texture="leaves"/>
+  </asset>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <light directional="true" pos="0 0 50" dir="0 0 -1"/>
+    <geom name="ground" type="plane" size="60 60 1" rgba="0.45 0.4 0.33 1"/>
+    <geom name="tree_trunk" type="cylinder" pos=")" +
+                            at + R"( 4" size="0.3 4" rgba="0.4 0.3 0.2 1"/>
+    <geom name="tree_crown" type="sphere" material="leaves" pos=")" +
+                            at + " " + std::to_string(kCrownCentre) + R"(" size=")" + std::to_string(kCrownRadius) +
+                            R"("/>
+)" + test::kRobotBody + R"(  </worldbody>
+</mujoco>)";
+  scenes::SceneTruth t;
+  t.type = "test";
+  t.extent = 60;
+  t.terrain.kind = "plane";
+  scenes::ObjectTruth tree;
+  tree.id = "tree";
+  tree.object_class = scenes::GeomClass::Crown;
+  tree.geoms = {"tree_trunk", "tree_crown"};
+  for (int i = 0; i < 12; ++i) {
+    const double a = i * M_PI / 6;
+    tree.footprint.push_back(kTreeAt + kCrownRadius * Eigen::Vector2d(std::cos(a), std::sin(a)));
+  }
+  tree.top_height = kCrownTop;
+  t.objects.push_back(tree);
+  t.path = {{0, 0}, {12, 0}};
+  t.origin = {37.5585, 126.999, 60.0};
+  return std::make_shared<sim::World>(scene, t);
+}
+
+TEST(PipelineTest, ATreeBesideThePathHasItsCrownFootprintRaisedToItsTop) {
+  auto world = roadsideTree();
+  sim::SimulatedRig source(world, smallCamera(), 40);
+  Pipeline pipeline(source.calibration(), PipelineConfig{});
+  while (auto f = source.next()) pipeline.process(f->sensors);
+  pipeline.finish();
+  const double cell = pipeline.map().voxelSize();
+  int under = 0, outside = 0;
+  for (const auto& v : pipeline.mesh().vertices()) {
+    const Eigen::Vector2d p((v.cell.x() + 0.5) * cell, (v.cell.y() + 0.5) * cell);
+    const double d = (p - kTreeAt).norm();
+    if (d <= 2.0) {
+      // within 2 m of the trunk: the crown's surface above the cell, to within 10 % of its top
+      ++under;
+      const double surface = kCrownCentre + std::sqrt(kCrownRadius * kCrownRadius - d * d);
+      EXPECT_NEAR(v.height(), surface, 0.1 * kCrownTop)
+          << "cell at (" << p.x() << ", " << p.y() << "), " << d << " m from the trunk";
+    } else if (d > kCrownRadius + 1.0 && d < 15) {
+      // the ground outside the crown left alone
+      ++outside;
+      EXPECT_FALSE(v.raised()) << "cell at (" << p.x() << ", " << p.y() << "), " << d << " m from the trunk, raised to "
+                               << v.height() << " m";
+    }
+  }
+  EXPECT_GT(under, 300);
+  EXPECT_GT(outside, 1000);
+}
+
 TEST(PipelineTest, BadFramesGiveWarningsNotCrashes) {
   test::TempDir dir;
   auto world = urbanWorld(dir);
