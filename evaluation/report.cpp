@@ -136,6 +136,73 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
   return out;
 }
 
+CoverageScores scoreBoundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
+                                     const sim::World& world, const RigCalibration& calibration,
+                                     const std::vector<CameraTruthFrame>& frames, int tolerance) {
+  CoverageScores out;
+  for (const auto& f : frames) {
+    const BoundaryCoverage b =
+        boundaryCoverage(mesh, roof, voxel_size, world, intrinsicsOf(calibration, f), f, tolerance);
+    out.images.push_back({f.frame, f.camera, b});
+    for (CoverageSum* k : {&out.all, &out.by_camera[f.camera]}) {
+      k->before += b.before * b.boundary_pixels;
+      k->after += b.after * b.boundary_pixels;
+      k->pixels += b.boundary_pixels;
+      ++k->images;
+    }
+  }
+  return out;
+}
+
+void TopCount::add(double error_before, double error_after, double tolerance) {
+  ++seen;
+  before += std::abs(error_before) <= tolerance, after += std::abs(error_after) <= tolerance;
+  high_before += error_before > tolerance, high_after += error_after > tolerance;
+}
+
+TopScores scoreObjectTops(const HeightScores& heights, const std::map<std::string, TopSightings>& seen,
+                          const std::vector<CrownRecord>& crowns, const sim::World& world) {
+  TopScores out;
+  // the trunk records within 1.5 m of each tree's centre
+  std::map<std::string, TreeCrown> crown_of;
+  for (const auto& o : world.truth().objects) {
+    if (o.object_class == scenes::GeomClass::Building || o.footprint.empty()) continue;
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& q : o.footprint) c += q;
+    c /= static_cast<double>(o.footprint.size());
+    for (const auto& rec : crowns) {
+      if ((rec.centre.cast<double>() - c).norm() > 1.5) continue;
+      TreeCrown& tc = crown_of[o.id];
+      ++tc.records;
+      for (std::size_t k = 0; k < kCrownOutcomes; ++k) tc.outcomes[k] += rec.outcomes[k];
+      tc.verdict = std::max(tc.verdict, rec.verdict);
+    }
+  }
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> errors;
+  out.by_class = {{"building", {}}, {"tree", {}}};
+  for (const auto& [id, t] : heights.tops) {
+    const auto it = seen.find(id);
+    if (it == seen.end()) continue;
+    TopScore& o = out.objects[id];
+    o.top = t;
+    o.sightings = it->second;
+    o.tolerance = topTolerance(t);
+    o.error_before = std::isfinite(t.sensed) ? t.sensed - t.top : -(t.top - t.base);
+    o.error_after = std::isfinite(t.recovered) ? t.recovered - t.top : o.error_before;
+    if (!t.building) {
+      if (const auto tc = crown_of.find(id); tc != crown_of.end()) o.crown = tc->second;
+    }
+    const std::string kind = t.building ? "building" : "tree";
+    ClassTops& s = out.by_class[kind];
+    s.all.add(o.error_before, o.error_after, o.tolerance);
+    if (o.sightings.with_lower_part > 0) s.with_lower_part.add(o.error_before, o.error_after, o.tolerance);
+    errors[kind].first.push_back(o.error_before), errors[kind].second.push_back(o.error_after);
+  }
+  for (auto& [kind, s] : out.by_class)
+    s.before = errorStats(errors[kind].first), s.after = errorStats(errors[kind].second);
+  return out;
+}
+
 const CameraIntrinsics& intrinsicsOf(const RigCalibration& calibration, const CameraTruthFrame& frame) {
   return calibration.cameras.at(static_cast<std::size_t>(frame.camera)).intrinsics;
 }
@@ -331,92 +398,45 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   hr["object_cells_sensed_as_terrain"] = h.sensed_as_terrain;
   // the tops of the objects whose top the camera saw: do they stand at their real height?
   {
-    const std::map<std::string, TopSightings> seen = topSeenFrames(world, pipeline.calibration(), truth.cameras);
+    const TopScores ts =
+        scoreObjectTops(h, topSeenFrames(world, pipeline.calibration(), truth.cameras), pipeline.crownRecords(), world);
     json& tops = hr["object_tops"];
     json& list = tops["list"] = json::object();
-    // per class: objects seen, at their real height and above it by more than the tolerance, sensed
-    // only (before) and recovered (after); and the same over those seen with their lower part
-    struct Count {
-      std::size_t seen = 0, before = 0, after = 0, high_before = 0, high_after = 0;
-      void add(double eb, double ea, double tol) {
-        ++seen;
-        before += std::abs(eb) <= tol, after += std::abs(ea) <= tol;
-        high_before += eb > tol, high_after += ea > tol;
-      }
-    };
-    struct Sum {
-      Count all, with_lower_part;
-      std::vector<double> e_before, e_after;
-    };
-    std::map<std::string, Sum> sums = {{"building", {}}, {"tree", {}}};
-    // per tree: the records of the trunks crown completion looked at within 1.5 m of its centre (a
-    // trunk whose object changed as it grew has several), their outcomes summed and the verdict
-    // that got furthest
-    struct TreeCrown {
-      std::size_t records = 0;
-      std::array<std::uint64_t, kCrownOutcomes> outcomes{};
-      CrownVerdict verdict = CrownVerdict::NotApplied;
-    };
-    std::map<std::string, TreeCrown> crown_of;
-    const std::vector<CrownRecord> crowns = pipeline.crownRecords();
-    for (const auto& o : world.truth().objects) {
-      if (o.object_class == scenes::GeomClass::Building || o.footprint.empty()) continue;
-      Eigen::Vector2d c = Eigen::Vector2d::Zero();
-      for (const auto& q : o.footprint) c += q;
-      c /= static_cast<double>(o.footprint.size());
-      for (const auto& rec : crowns) {
-        if ((rec.centre.cast<double>() - c).norm() > 1.5) continue;
-        TreeCrown& tc = crown_of[o.id];
-        ++tc.records;
-        for (std::size_t k = 0; k < kCrownOutcomes; ++k) tc.outcomes[k] += rec.outcomes[k];
-        tc.verdict = std::max(tc.verdict, rec.verdict);
-      }
-    }
-    for (const auto& [id, t] : h.tops) {
-      const auto it = seen.find(id);
-      if (it == seen.end()) continue;
-      const double tol = topTolerance(t);
-      const double eb = std::isfinite(t.sensed) ? t.sensed - t.top : -(t.top - t.base);
-      const double ea = std::isfinite(t.recovered) ? t.recovered - t.top : eb;
-      Sum& s = sums[t.building ? "building" : "tree"];
-      s.all.add(eb, ea, tol);
-      if (it->second.with_lower_part > 0) s.with_lower_part.add(eb, ea, tol);
-      s.e_before.push_back(eb), s.e_after.push_back(ea);
+    for (const auto& [id, o] : ts.objects) {
       json outcomes = json::object();
       for (std::size_t k = 0; k < kEstimateOutcomes; ++k)
-        outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = t.outcomes[k];
-      list[id] = {{"class", t.building ? "building" : "tree"},
-                  {"true_top_m", t.top},
-                  {"sensed_top_m", t.sensed},
-                  {"recovered_top_m", t.recovered},
-                  {"error_m", ea},
-                  {"tolerance_m", tol},
-                  {"frames_top_seen", it->second.top},
-                  {"frames_lower_part_seen_with_top", it->second.with_lower_part},
-                  {"cells", t.cells},
+        outcomes[outcomeName(static_cast<EstimateOutcome>(k))] = o.top.outcomes[k];
+      list[id] = {{"class", o.top.building ? "building" : "tree"},
+                  {"true_top_m", o.top.top},
+                  {"sensed_top_m", o.top.sensed},
+                  {"recovered_top_m", o.top.recovered},
+                  {"error_m", o.error_after},
+                  {"tolerance_m", o.tolerance},
+                  {"frames_top_seen", o.sightings.top},
+                  {"frames_lower_part_seen_with_top", o.sightings.with_lower_part},
+                  {"cells", o.top.cells},
                   {"estimation_outcomes", outcomes}};
-      if (!t.building) {
+      if (!o.top.building) {
         json& crown = list[id]["crown"];
-        if (const auto tc = crown_of.find(id); tc != crown_of.end()) {
+        if (o.crown) {
           json counts = json::object();
           for (std::size_t k = 0; k < kCrownOutcomes; ++k)
-            counts[outcomeName(static_cast<CrownOutcome>(k))] = tc->second.outcomes[k];
-          crown = {{"trunk_records", tc->second.records},
-                   {"outcomes", counts},
-                   {"verdict", verdictName(tc->second.verdict)}};
+            counts[outcomeName(static_cast<CrownOutcome>(k))] = o.crown->outcomes[k];
+          crown = {
+              {"trunk_records", o.crown->records}, {"outcomes", counts}, {"verdict", verdictName(o.crown->verdict)}};
         }
       }
     }
-    for (const auto& [kind, s] : sums) {
-      const Count& a = s.all;
-      const Count& w = s.with_lower_part;
+    for (const auto& [kind, s] : ts.by_class) {
+      const TopCount& a = s.all;
+      const TopCount& w = s.with_lower_part;
       tops[kind] = {{"top_seen", a.seen},
                     {"at_height_before", a.before},
                     {"at_height_after", a.after},
                     {"too_high_before", a.high_before},
                     {"too_high_after", a.high_after},
-                    {"before", errorJson(errorStats(s.e_before))},
-                    {"after", errorJson(errorStats(s.e_after))},
+                    {"before", errorJson(s.before)},
+                    {"after", errorJson(s.after)},
                     {"lower_part_seen_with_top",
                      {{"objects", w.seen},
                       {"at_height_before", w.before},
@@ -469,94 +489,43 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
   // height baselines on the height map: sensed only, inpainted, recovered
   r["height_baselines"] = json::object();
   {
-    const auto& verts = pipeline.mesh().vertices();
-    // a height map per cell over the mesh's extent, inpainted: not over a mesh wider than this
-    constexpr std::int64_t kMaxCells = 4096;
-    const auto [lo, hi] =
-        verts.empty() ? std::make_pair(CellIndex(0, 0), CellIndex(0, 0)) : pipeline.mesh().cellBounds();
-    const std::int64_t span =
-        std::max(static_cast<std::int64_t>(hi.x()) - lo.x(), static_cast<std::int64_t>(hi.y()) - lo.y()) + 1;
-    if (span > kMaxCells) {
-      r["height_baselines"]["skipped"] = "the mesh spans " + std::to_string(span) + " cells, more than " +
-                                         std::to_string(kMaxCells) + ": no height map over its extent";
-    } else if (!verts.empty()) {
-      const int x0 = lo.x(), y0 = lo.y(), x1 = hi.x(), y1 = hi.y();
-      cv::Mat sensed(y1 - y0 + 1, x1 - x0 + 1, CV_32FC1, cv::Scalar(std::nanf(""))), recovered = sensed.clone();
-      for (const auto& v : verts) {
-        sensed.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.sensed_height;
-        recovered.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.height();
-      }
-      // the recovered map also has the roofs of completed footprints (inside the mesh's extent)
-      for (const auto& rc : pipeline.roofCells()) {
-        const int row = rc.cell.y() - y0, col = rc.cell.x() - x0;
-        if (row >= 0 && col >= 0 && row < recovered.rows && col < recovered.cols)
-          recovered.at<float>(row, col) = rc.height;
-      }
-      const cv::Mat inpainted = inpaintHeights(sensed, 10);
-      // object cells: the cells of object footprints inside the mapped area
-      std::vector<double> e_sensed, e_inpaint, e_recovered;
-      std::size_t cells = 0, c_sensed = 0, c_inpaint = 0, c_recovered = 0;
-      const double cs = map.voxelSize();
-      for (int r0 = 0; r0 < sensed.rows; r0 += 2) {
-        for (int c0 = 0; c0 < sensed.cols; c0 += 2) {
-          const double x = (x0 + c0 + 0.5) * cs, y = (y0 + r0 + 0.5) * cs;
-          const float si = inpainted.at<float>(r0, c0);
-          if (!std::isfinite(si) && !std::isfinite(sensed.at<float>(r0, c0))) continue;
-          int geom = -1;
-          const double top = world.surfaceHeight(x, y, &geom);
-          if (!scenes::isObjectClass(world.geomClass(geom))) continue;
-          ++cells;
-          if (std::isfinite(sensed.at<float>(r0, c0))) ++c_sensed, e_sensed.push_back(sensed.at<float>(r0, c0) - top);
-          if (std::isfinite(recovered.at<float>(r0, c0)))
-            ++c_recovered, e_recovered.push_back(recovered.at<float>(r0, c0) - top);
-          if (std::isfinite(si)) ++c_inpaint, e_inpaint.push_back(si - top);
-        }
-      }
-      auto entry = [&](const std::vector<double>& e, std::size_t covered) {
-        json j = errorJson(errorStats(e));
-        j["coverage"] = cells ? static_cast<double>(covered) / cells : 0.0;
+    const HeightBaselineScores hb = scoreHeightBaselines(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world);
+    json& out = r["height_baselines"];
+    if (hb.status == HeightBaselineScores::Status::TooWide) {
+      out["skipped"] = "the mesh spans " + std::to_string(hb.span) + " cells, more than " +
+                       std::to_string(kMaxHeightMapCells) + ": no height map over its extent";
+    } else if (hb.status == HeightBaselineScores::Status::Scored) {
+      const auto entry = [](const HeightMapError& e) {
+        json j = errorJson(e.error);
+        j["coverage"] = e.coverage;
         return j;
       };
-      r["height_baselines"]["sensed_only"] = entry(e_sensed, c_sensed);
-      r["height_baselines"]["inpainting"] = entry(e_inpaint, c_inpaint);
-      r["height_baselines"]["boundary_estimation"] = entry(e_recovered, c_recovered);
-      r["height_baselines"]["object_cells"] = cells;
+      out["sensed_only"] = entry(hb.sensed_only);
+      out["inpainting"] = entry(hb.inpainting);
+      out["boundary_estimation"] = entry(hb.recovered);
+      out["object_cells"] = hb.object_cells;
     }
   }
 
   // boundary coverage over the kept camera images, overall and per camera
-  struct Coverage {
-    double before = 0, after = 0;  // weighted by boundary pixels
-    std::size_t pixels = 0, images = 0;
-  };
-  Coverage all;
-  std::map<int, Coverage> per_camera;
-  json frames = json::array();
+  const CoverageScores coverage = scoreBoundaryCoverage(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world,
+                                                        pipeline.calibration(), truth.cameras, 3);
   const auto& cameras = pipeline.calibration().cameras;
-  for (const auto& c : truth.cameras) {
-    const BoundaryCoverage b = boundaryCoverage(pipeline.mesh(), pipeline.roofCells(), map.voxelSize(), world,
-                                                intrinsicsOf(pipeline.calibration(), c), c, 3);
+  json frames = json::array();
+  for (const ImageCoverage& c : coverage.images) {
     frames.push_back({{"frame", c.frame},
                       {"camera", cameras.at(c.camera).name},
-                      {"before", b.before},
-                      {"after", b.after},
-                      {"boundary_pixels", b.boundary_pixels}});
-    for (Coverage* k : {&all, &per_camera[c.camera]}) {
-      k->before += b.before * b.boundary_pixels;
-      k->after += b.after * b.boundary_pixels;
-      k->pixels += b.boundary_pixels;
-      ++k->images;
-    }
+                      {"before", c.coverage.before},
+                      {"after", c.coverage.after},
+                      {"boundary_pixels", c.coverage.boundary_pixels}});
   }
-  r["boundary_coverage"] = all.pixels ? all.after / all.pixels : 0.0;
-  r["boundary_coverage_before"] = all.pixels ? all.before / all.pixels : 0.0;
+  r["boundary_coverage"] = coverage.all.meanAfter();
+  r["boundary_coverage_before"] = coverage.all.meanBefore();
   r["boundary_coverage_frames"] = frames;
   json& by_camera = r["boundary_coverage_by_camera"] = json::object();
-  for (const auto& [camera, k] : per_camera) {
-    by_camera[cameras.at(camera).name] = {{"after", k.pixels ? k.after / k.pixels : 0.0},
-                                          {"before", k.pixels ? k.before / k.pixels : 0.0},
-                                          {"boundary_pixels", k.pixels},
-                                          {"images", k.images}};
+  for (const auto& [camera, k] : coverage.by_camera) {
+    by_camera[cameras.at(camera).name] = {
+        {"after", k.meanAfter()}, {"before", k.meanBefore()}, {"boundary_pixels", k.pixels}, {"images", k.images}};
   }
   r["cameras"] = json::array();
   for (const auto& c : cameras) r["cameras"].push_back(c.name);

@@ -5,10 +5,13 @@
 
 #include "core/pipeline.hpp"
 #include "evaluation/ground_truth.hpp"
+#include "evaluation/scoring.hpp"
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +58,27 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
                                   const sim::World& world, const CameraIntrinsics& intrinsics,
                                   const CameraTruthFrame& frame, int tolerance);
 
+// Boundary coverage over every kept camera image: each image's, and the means weighted by boundary
+// pixels over all of them and per camera (by index into the calibration's cameras).
+struct CoverageSum {
+  double before = 0, after = 0;  // coverage times boundary pixels, summed
+  std::size_t pixels = 0, images = 0;
+  double meanBefore() const { return pixels ? before / pixels : 0.0; }
+  double meanAfter() const { return pixels ? after / pixels : 0.0; }
+};
+struct ImageCoverage {
+  int frame = 0, camera = 0;
+  BoundaryCoverage coverage;
+};
+struct CoverageScores {
+  std::vector<ImageCoverage> images;
+  CoverageSum all;
+  std::map<int, CoverageSum> by_camera;
+};
+CoverageScores scoreBoundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
+                                     const sim::World& world, const RigCalibration& calibration,
+                                     const std::vector<CameraTruthFrame>& frames, int tolerance);
+
 // The intrinsics of the camera that took a kept image (frame.camera into calibration.cameras).
 const CameraIntrinsics& intrinsicsOf(const RigCalibration& calibration, const CameraTruthFrame& frame);
 
@@ -78,6 +102,39 @@ struct TopSightings {
 // looks at a point of it within kLowerPart of its base. Objects whose top no frame saw are absent.
 std::map<std::string, TopSightings> topSeenFrames(const sim::World& world, const RigCalibration& calibration,
                                                   const std::vector<CameraTruthFrame>& frames);
+
+// Do the tops a camera saw stand at their real height (within topTolerance)? Per object seen
+// (topSeenFrames) its error sensed only (before: the sensed top, or its base where nothing of it was
+// sensed) and after recovery, and for a tree what crown completion made of the trunks within 1.5 m
+// of its centre (a trunk whose object changed as it grew has several records: their outcomes
+// summed, the verdict that got furthest). Per class ("building", "tree"): objects seen, at their
+// real height and above it by more than the tolerance, before and after; and the same over those
+// seen with their lower part.
+struct TopCount {
+  std::size_t seen = 0, before = 0, after = 0, high_before = 0, high_after = 0;
+  void add(double error_before, double error_after, double tolerance);
+};
+struct TreeCrown {
+  std::size_t records = 0;
+  std::array<std::uint64_t, kCrownOutcomes> outcomes{};
+  CrownVerdict verdict = CrownVerdict::NotApplied;
+};
+struct TopScore {
+  ObjectTop top;
+  TopSightings sightings;
+  double error_before = 0, error_after = 0, tolerance = 0;  // [m]
+  std::optional<TreeCrown> crown;                           // trees with a trunk record only
+};
+struct ClassTops {
+  TopCount all, with_lower_part;
+  ErrorStats before, after;
+};
+struct TopScores {
+  std::map<std::string, TopScore> objects;  // by object id
+  std::map<std::string, ClassTops> by_class;
+};
+TopScores scoreObjectTops(const HeightScores& heights, const std::map<std::string, TopSightings>& seen,
+                          const std::vector<CrownRecord>& crowns, const sim::World& world);
 
 struct EvaluationOptions {
   // score the ground segmentation baselines (fixed band, RANSAC plane, PCL's progressive

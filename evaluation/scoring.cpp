@@ -1,5 +1,9 @@
 #include "evaluation/scoring.hpp"
 
+#include "evaluation/baselines.hpp"
+
+#include <opencv2/core.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -219,6 +223,56 @@ RoofScores scoreRoofCells(const std::vector<RoofCell>& roof, double voxel_size, 
     errors.push_back(r.height - t.top);
   }
   out.on_objects = errorStats(errors);
+  return out;
+}
+
+HeightBaselineScores scoreHeightBaselines(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
+                                          const sim::World& world) {
+  HeightBaselineScores out;
+  const auto& verts = mesh.vertices();
+  if (verts.empty()) return out;
+  const auto [lo, hi] = mesh.cellBounds();
+  out.span = std::max(static_cast<std::int64_t>(hi.x()) - lo.x(), static_cast<std::int64_t>(hi.y()) - lo.y()) + 1;
+  if (out.span > kMaxHeightMapCells) {
+    out.status = HeightBaselineScores::Status::TooWide;
+    return out;
+  }
+  out.status = HeightBaselineScores::Status::Scored;
+  const int x0 = lo.x(), y0 = lo.y(), x1 = hi.x(), y1 = hi.y();
+  cv::Mat sensed(y1 - y0 + 1, x1 - x0 + 1, CV_32FC1, cv::Scalar(std::nanf(""))), recovered = sensed.clone();
+  for (const auto& v : verts) {
+    sensed.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.sensed_height;
+    recovered.at<float>(v.cell.y() - y0, v.cell.x() - x0) = v.height();
+  }
+  // the recovered map also has the roofs of completed footprints (inside the mesh's extent)
+  for (const auto& rc : roof) {
+    const int row = rc.cell.y() - y0, col = rc.cell.x() - x0;
+    if (row >= 0 && col >= 0 && row < recovered.rows && col < recovered.cols) recovered.at<float>(row, col) = rc.height;
+  }
+  const cv::Mat inpainted = inpaintHeights(sensed, 10);
+  // object cells: the cells of object footprints inside the mapped area
+  std::vector<double> e_sensed, e_inpaint, e_recovered;
+  for (int r0 = 0; r0 < sensed.rows; r0 += 2) {
+    for (int c0 = 0; c0 < sensed.cols; c0 += 2) {
+      const double x = (x0 + c0 + 0.5) * voxel_size, y = (y0 + r0 + 0.5) * voxel_size;
+      const float s = sensed.at<float>(r0, c0), si = inpainted.at<float>(r0, c0), rh = recovered.at<float>(r0, c0);
+      if (!std::isfinite(si) && !std::isfinite(s)) continue;
+      int geom = -1;
+      const double top = world.surfaceHeight(x, y, &geom);
+      if (!scenes::isObjectClass(world.geomClass(geom))) continue;
+      ++out.object_cells;
+      if (std::isfinite(s)) e_sensed.push_back(s - top);
+      if (std::isfinite(rh)) e_recovered.push_back(rh - top);
+      if (std::isfinite(si)) e_inpaint.push_back(si - top);
+    }
+  }
+  const auto error = [&out](const std::vector<double>& e) {
+    const double cells = static_cast<double>(out.object_cells);
+    return HeightMapError{errorStats(e), out.object_cells ? static_cast<double>(e.size()) / cells : 0.0};
+  };
+  out.sensed_only = error(e_sensed);
+  out.inpainting = error(e_inpaint);
+  out.recovered = error(e_recovered);
   return out;
 }
 

@@ -92,4 +92,23 @@ struct FootprintMatch {
 };
 FootprintMatch matchFootprint(const Footprint& footprint, const sim::World& world, double step);
 
+// The height map's baselines against the true tops of the object cells in the mapped area (every
+// second cell each way): the sensed heights alone, the sensed heights inpainted (Telea, radius 10
+// cells), and the recovered heights (mesh vertices, then the roof cells of completed footprints).
+// Each error is over the object cells the map has a height for, its coverage the share of object
+// cells that have one. A mesh wider than kMaxHeightMapCells cells is not scored.
+struct HeightMapError {
+  ErrorStats error;
+  double coverage = 0;
+};
+struct HeightBaselineScores {
+  enum class Status { NoMesh, TooWide, Scored } status = Status::NoMesh;
+  std::int64_t span = 0;  // [cells] the mesh's extent (its larger side)
+  HeightMapError sensed_only, inpainting, recovered;
+  std::size_t object_cells = 0;
+};
+inline constexpr std::int64_t kMaxHeightMapCells = 4096;
+HeightBaselineScores scoreHeightBaselines(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
+                                          const sim::World& world);
+
 }  // namespace terrain::eval

@@ -164,6 +164,15 @@ TEST(FootprintMatchTest, FindsTheBuildingUnderAFootprintAndTheirOverlap) {
   EXPECT_TRUE(matchFootprint(rectangle(20, 22, -2, 2), *world, 0.2).object.empty());
 }
 
+// 20 cells on the wall of test::wallWorld(12) (x = 12.5 m, y = 0.1 to 3.9 m), sensed 3 m up, all
+// but the first raised to 19.6 m.
+void addWallCells(std::vector<Voxel>& voxels, std::vector<MeshVertex>& vertices) {
+  for (int j = 0; j < 20; ++j) {
+    test::addColumn(voxels, vertices, CellIndex(62, j), 15, 3.0f, VoxelLabel::NonGround);
+    if (j > 0) vertices.back().estimates = {{19.6f, 12.0f, 1.6f}}, vertices.back().recovered_height = 19.6f;
+  }
+}
+
 // The wall of test::wallWorld at x = 12 (20 m high): of 20 of its cells in the mesh, sensed 3 m up,
 // 19 were raised to 19.6 m; their 95th percentile is the wall's recovered top, within 10 % of its
 // height (2 m) of the truth. Roof cells join the recovered top: 5 at 30 m lift it to 30 m.
@@ -171,10 +180,7 @@ TEST(ObjectTopTest, AnObjectsTopIsThe95thPercentileOfItsCellsHeights) {
   const auto world = test::wallWorld(12.0);
   std::vector<Voxel> voxels;
   std::vector<MeshVertex> vertices;
-  for (int j = 0; j < 20; ++j) {
-    test::addColumn(voxels, vertices, CellIndex(62, j), 15, 3.0f, VoxelLabel::NonGround);
-    if (j > 0) vertices.back().estimates = {{19.6f, 12.0f, 1.6f}}, vertices.back().recovered_height = 19.6f;
-  }
+  addWallCells(voxels, vertices);
   VoxelMap map(VoxelMapConfig{0.2});
   ASSERT_TRUE(map.restore(voxels));
   TerrainMesh mesh;
@@ -194,6 +200,72 @@ TEST(ObjectTopTest, AnObjectsTopIsThe95thPercentileOfItsCellsHeights) {
   EXPECT_EQ(with_roof.cells, 25u);
   EXPECT_NEAR(with_roof.recovered, 30.0, 1e-6);
   EXPECT_DOUBLE_EQ(with_roof.sensed, 3.0);
+}
+
+// The wall's 20 cells of the test above, sensed 3 m up and all but the first raised to 19.6 m. The
+// height map's baselines score every second cell (10, all over the wall): sensed only and inpainted
+// 17 m too low each (nothing to inpaint), recovered 0.4 m too low but the first (17 m): MAE
+// (17 + 9 x 0.4) / 10 = 2.06 m. A mesh wider than kMaxHeightMapCells cells is not scored.
+TEST(HeightBaselineTest, TheHeightMapsBaselinesScoreEverySecondObjectCell) {
+  const auto world = test::wallWorld(12.0);
+  std::vector<Voxel> voxels;
+  std::vector<MeshVertex> vertices;
+  addWallCells(voxels, vertices);
+  TerrainMesh mesh;
+  ASSERT_TRUE(mesh.restore(vertices));
+  const HeightBaselineScores b = scoreHeightBaselines(mesh, {}, 0.2, *world);
+  ASSERT_EQ(b.status, HeightBaselineScores::Status::Scored);
+  EXPECT_EQ(b.span, 20);
+  EXPECT_EQ(b.object_cells, 10u);
+  for (const HeightMapError* e : {&b.sensed_only, &b.inpainting}) {
+    EXPECT_EQ(e->error.count, 10u);
+    EXPECT_NEAR(e->error.mae, 17.0, 1e-5);
+    EXPECT_DOUBLE_EQ(e->coverage, 1.0);
+  }
+  EXPECT_NEAR(b.recovered.error.mae, 2.06, 1e-5);
+  EXPECT_NEAR(b.recovered.error.bias, -2.06, 1e-5);
+  // an empty mesh, and one 4,101 cells across
+  EXPECT_EQ(scoreHeightBaselines(TerrainMesh{}, {}, 0.2, *world).status, HeightBaselineScores::Status::NoMesh);
+  test::addColumn(voxels, vertices, CellIndex(62 + 4100, 0), 15, 3.0f, VoxelLabel::NonGround);
+  TerrainMesh wide;
+  ASSERT_TRUE(wide.restore(vertices));
+  const HeightBaselineScores too_wide = scoreHeightBaselines(wide, {}, 0.2, *world);
+  EXPECT_EQ(too_wide.status, HeightBaselineScores::Status::TooWide);
+  EXPECT_EQ(too_wide.span, 4101);
+}
+
+// The wall's top as the test above has it (sensed 3 m, recovered 19.6 m, true 20 m, tolerance 2 m):
+// seen with its lower part it stands at its height after recovery and not before; with 5 roof cells
+// at 30 m it stands 10 m too high. An object no frame saw is not scored.
+TEST(ObjectTopTest, TopsAreCountedAtTheirHeightAndTooHighPerClass) {
+  const auto world = test::wallWorld(12.0);
+  ObjectTop wall;
+  wall.building = true, wall.top = 20, wall.sensed = 3, wall.recovered = 19.6, wall.cells = 20;
+  HeightScores h;
+  h.tops["wall"] = wall;
+  const TopScores at = scoreObjectTops(h, {{"wall", {2, 1}}}, {}, *world);
+  ASSERT_EQ(at.objects.count("wall"), 1u);
+  const TopScore& o = at.objects.at("wall");
+  EXPECT_DOUBLE_EQ(o.error_before, -17.0);
+  EXPECT_NEAR(o.error_after, -0.4, 1e-12);
+  EXPECT_DOUBLE_EQ(o.tolerance, 2.0);
+  EXPECT_FALSE(o.crown);
+  const ClassTops& b = at.by_class.at("building");
+  EXPECT_EQ(b.all.seen, 1u);
+  EXPECT_EQ(b.all.before, 0u);
+  EXPECT_EQ(b.all.after, 1u);
+  EXPECT_EQ(b.all.high_after, 0u);
+  EXPECT_EQ(b.with_lower_part.after, 1u);
+  EXPECT_NEAR(b.after.mae, 0.4, 1e-12);
+  EXPECT_EQ(at.by_class.at("tree").all.seen, 0u);
+  // too high
+  h.tops["wall"].recovered = 30;
+  const ClassTops& high = scoreObjectTops(h, {{"wall", {2, 0}}}, {}, *world).by_class.at("building");
+  EXPECT_EQ(high.all.after, 0u);
+  EXPECT_EQ(high.all.high_after, 1u);
+  EXPECT_EQ(high.with_lower_part.seen, 0u);
+  // not seen
+  EXPECT_TRUE(scoreObjectTops(h, {}, {}, *world).objects.empty());
 }
 
 // A camera 1.6 m up looking east at the 20 m wall: from 40 m its top edge is in the image (the
