@@ -56,6 +56,14 @@ class KittiCommand : public Command {
                   << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  "
                   << j[m]["precision"].get<double>() << "     " << j[m]["recall"].get<double>() << "\n";
       }
+      // the GMRF's own share: its voxel labels before the per-point step
+      for (const char* m : {"gmrf_icm", "gmrf_mincut"}) {
+        const auto& v = j["voxel_labels"][m];
+        std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22)
+                  << (std::string(m) + " voxels") << std::right << v["f1"].get<double>() << "  "
+                  << v["iou"].get<double>() << "  " << v["precision"].get<double>() << "     "
+                  << v["recall"].get<double>() << "\n";
+      }
       // where the configured solver calls ground wrongly
       const auto& conf = j["confusion"];
       std::vector<std::pair<std::uint64_t, std::string>> wrong;

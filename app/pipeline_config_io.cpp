@@ -59,6 +59,8 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("ground.depth_below", c.ground.depth_below, offOr(100, "m"));
   v.number("ground.rise_above", c.ground.rise_above, offOr(100, "m"));
   v.flag("ground.lower_envelope", c.ground.lower_envelope);
+  v.number("ground.point_rise", c.ground.point_rise, offOr(10, "m"));
+  v.number("ground.point_reach", c.ground.point_reach, closed(0, 10, "m"));
   v.number("ground.tile_size", c.ground.tile_size, closed(1, 1000, "m"));
   v.integer("ground.tile_radius", c.ground.tile_radius, closed(0, 10));
   v.integer("ground.histogram_stride", c.ground.histogram_stride, closed(1, 8));

@@ -35,7 +35,8 @@ std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const V
   VoxelMap map(voxels);
   std::vector<std::uint32_t> voxel_of;
   map.insert(points, 0, nullptr, &voxel_of);
-  const std::vector<std::uint8_t> out = pointLabels(voxel_of, segmentGroundLabels(map, ground).refined);
+  const std::vector<std::uint8_t> out =
+      labelScanPoints(map, points, voxel_of, segmentGroundLabels(map, ground).refined, ground);
   if (milliseconds)
     *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
@@ -121,6 +122,12 @@ json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::ui
   g.solver = GroundSegmentationConfig::Solver::MinCut;
   j["gmrf_mincut"] = score(segmentScan(points, voxels, g, &ms));
   j["gmrf_mincut"]["time_ms"] = ms;
+  // the GMRF's voxel labels as they are, before the per-point step
+  g.point_rise = 0;
+  g.solver = GroundSegmentationConfig::Solver::Icm;
+  j["voxel_labels"]["gmrf_icm"] = score(segmentScan(points, voxels, g));
+  g.solver = GroundSegmentationConfig::Solver::MinCut;
+  j["voxel_labels"]["gmrf_mincut"] = score(segmentScan(points, voxels, g));
   // where the configured solver errs
   j["confusion"] = kittiConfusion(points, labels, segmentScan(points, voxels, ground));
   j["confusion"]["method"] = ground.solver == GroundSegmentationConfig::Solver::Icm ? "gmrf_icm" : "gmrf_mincut";

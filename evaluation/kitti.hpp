@@ -22,8 +22,9 @@ nlohmann::json kittiConfusion(const std::vector<Point3>& points, const std::vect
                               const std::vector<std::uint8_t>& ground);
 
 // sensor_height: the lidar's height above the road [m] (KITTI: 1.73), for the fixed band. The
-// report holds every method's scores and, for the configured solver, the confusion
-// (kittiConfusion) under "confusion".
+// report holds every method's scores (kGroundMethods; the GMRF's with labelScanPoints' per-point
+// step), the GMRF's voxel labels without that step under "voxel_labels", and, for the configured
+// solver, the confusion (kittiConfusion) under "confusion".
 nlohmann::json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                               const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground,
                               double sensor_height);
@@ -34,7 +35,8 @@ nlohmann::json scoreKittiScan(const std::vector<Point3>& points, const std::vect
 std::string kittiVerdictPly(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                             const std::vector<std::uint8_t>& ground);
 
-// Per-point ground labels of the paper's method on one scan, and the time it took [ms].
+// Per-point ground labels of the paper's method on one scan (the GMRF's voxel labels refined per
+// point by labelScanPoints), and the time it took [ms].
 std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
                                       const GroundSegmentationConfig& ground, double* milliseconds = nullptr);
 

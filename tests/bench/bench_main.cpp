@@ -324,6 +324,19 @@ void BM_KittiScanSegmentation(benchmark::State& state) {
 }
 BENCHMARK(BM_KittiScanSegmentation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// the per-point step of that segmentation alone (labelScanPoints), on the min-cut voxel labels
+void BM_KittiScanPointLabels(benchmark::State& state) {
+  static const rig::KittiScan scan =
+      rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
+  const GroundSegmentationConfig cfg;
+  VoxelMap map(VoxelMapConfig{});
+  std::vector<std::uint32_t> voxel_of;
+  map.insert(scan.points, 0, nullptr, &voxel_of);
+  const std::vector<std::uint8_t> voxel_ground = segmentGroundLabels(map, cfg).refined;
+  for (auto _ : state) benchmark::DoNotOptimize(labelScanPoints(map, scan.points, voxel_of, voxel_ground, cfg).data());
+}
+BENCHMARK(BM_KittiScanPointLabels)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // the progressive morphological filter baseline on one real scan: ours (0, bucketed boxes) against
 // PCL's octree (1), with the same labels
 void BM_KittiScanMorphologicalFilter(benchmark::State& state) {
@@ -579,6 +592,8 @@ int main(int argc, char** argv) {
     rows.push_back({"KITTI scan 000000 segmentation, ICM", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
   if (const auto* r = get("BM_KittiScanSegmentation/1"))
     rows.push_back({"KITTI scan 000000 segmentation, min-cut", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
+  if (const auto* r = get("BM_KittiScanPointLabels"))
+    rows.push_back({"KITTI scan 000000, of which the per-point step", format("%.1f ms", ms(*r)), "", ""});
 
   std::printf("\n%-60s %16s %16s %12s\n", "figure", "median", "target", "vs baseline");
   for (const Row& r : rows)

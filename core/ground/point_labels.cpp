@@ -1,0 +1,106 @@
+// Per-point ground labels of one scan from the labels of its voxels (ground_segmentation.hpp,
+// labelScanPoints).
+
+#include "core/ground_segmentation.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace terrain {
+
+namespace {
+
+// A dense grid of columns over the map's horizontal extent, one float per column.
+class ColumnGrid {
+ public:
+  ColumnGrid(const VoxelMap& map, float fill)
+      : x0_(map.lowestIndex().x() - 1),
+        y0_(map.lowestIndex().y() - 1),
+        nx_(std::int64_t(map.highestIndex().x()) - x0_ + 2),
+        ny_(std::int64_t(map.highestIndex().y()) - y0_ + 2),
+        cells_(std::size_t(nx_ * ny_), fill) {}
+  // [0, size()) for a voxel index's column (with a margin of one column each way inside the grid)
+  std::size_t at(const VoxelIndex& v) const { return std::size_t((v.y() - y0_) * nx_ + (v.x() - x0_)); }
+  std::size_t size() const { return cells_.size(); }
+  std::int64_t stride() const { return nx_; }
+  float& operator[](std::size_t i) { return cells_[i]; }
+  float operator[](std::size_t i) const { return cells_[i]; }
+
+ private:
+  std::int64_t x0_, y0_, nx_, ny_;
+  std::vector<float> cells_;
+};
+
+}  // namespace
+
+std::int64_t scanColumnCount(const VoxelMap& map) {
+  if (map.size() == 0) return 0;
+  return (std::int64_t(map.highestIndex().x()) - map.lowestIndex().x() + 3) *
+         (std::int64_t(map.highestIndex().y()) - map.lowestIndex().y() + 3);
+}
+
+std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector<Point3>& points,
+                                          const std::vector<std::uint32_t>& voxel_of,
+                                          const std::vector<std::uint8_t>& voxel_ground,
+                                          const GroundSegmentationConfig& config) {
+  std::vector<std::uint8_t> out(points.size(), 0);
+  const auto& voxels = map.voxels();
+  // each point takes its voxel's label (0 for a point in none)
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (voxel_of[i] != VoxelMap::kNoVoxel) out[i] = voxel_ground[voxel_of[i]];
+  if (config.point_rise <= 0 || map.size() == 0 || scanColumnCount(map) > kMaxScanColumns) return out;
+
+  // the lowest point of each column among those its ground voxels hold
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  ColumnGrid lowest(map, kNone);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!out[i]) continue;
+    float& low = lowest[lowest.at(voxels[voxel_of[i]].index)];
+    low = std::min(low, static_cast<float>(points[i].z()));
+  }
+
+  // the ground's level at each voxel's column: the lower median of the lowest ground points of the
+  // column and its eight neighbours (kNone: no ground there)
+  const std::int64_t stride = lowest.stride();
+  std::vector<float> level(voxels.size(), kNone);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4096), [&](const auto& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      const std::int64_t c = std::int64_t(lowest.at(voxels[v].index));
+      // insertion into a sorted run of at most nine
+      std::array<float, 9> around;
+      int n = 0;
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dx = -1; dx <= 1; ++dx) {
+          const float z = lowest[std::size_t(c + dy * stride + dx)];
+          if (z == kNone) continue;
+          int k = n++;
+          for (; k > 0 && around[k - 1] > z; --k) around[k] = around[k - 1];
+          around[k] = z;
+        }
+      if (n > 0) level[v] = around[(n - 1) / 2];
+    }
+  });
+
+  // a point of a ground voxel standing more than point_rise above the level stands on the ground;
+  // a point of a non-ground voxel within point_reach of it continues the ground beside it
+  const float rise = static_cast<float>(config.point_rise), reach = static_cast<float>(config.point_reach);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 8192), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      if (voxel_of[i] == VoxelMap::kNoVoxel) continue;
+      const float m = level[voxel_of[i]];
+      if (m == kNone) continue;
+      const float above = static_cast<float>(points[i].z()) - m;
+      out[i] = out[i] ? above <= rise : std::abs(above) <= reach;
+    }
+  });
+  return out;
+}
+
+}  // namespace terrain
