@@ -136,6 +136,8 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.flag("crown.cut_off_tops", c.crown.cut_off_tops);
   v.number("crown.cut_off_quantile", c.crown.cut_off_quantile, closed(0, 1));
   v.number("crown.radius_quantile", c.crown.radius_quantile, closed(0, 1));
+  v.number("crown.radius_agreement", c.crown.radius_agreement, closed(0, 10));
+  v.number("crown.agreement_bearings", c.crown.agreement_bearings, closed(0, 3.2, "rad"));
   v.flag("crown.axis_ceiling", c.crown.axis_ceiling);
   v.number("crown.ceiling_halfwidth", c.crown.ceiling_halfwidth, closed(0, 5, "m"));
   // the crowns' visual hull

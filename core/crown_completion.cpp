@@ -540,16 +540,32 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       };
       const double foot = std::isfinite(ground) ? ground : t.top;
       std::vector<float> tops, radii;
+      double bearings = 0;  // [rad] the widest angle at the trunk between two of the group's cameras
       for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
         const double lowest = by_top[first]->top, reach = lowest + cfg.max_top_spread * std::max(0.0, lowest - foot);
         std::size_t end = first;
         while (end < by_top.size() && by_top[end]->top <= reach) ++end;
         if (static_cast<int>(end - first) < min_samples || !spread(first, end)) continue;
         for (std::size_t i = first; i < end; ++i) tops.push_back(by_top[i]->top), radii.push_back(by_top[i]->radius);
+        if (cfg.radius_agreement > 0) {
+          for (std::size_t i = first; i < end; ++i)
+            for (std::size_t j = i + 1; j < end; ++j) {
+              const Eigen::Vector2f a = by_top[i]->camera - by_top[i]->trunk, b = by_top[j]->camera - by_top[j]->trunk;
+              bearings = std::max(bearings,
+                                  static_cast<double>(std::atan2(std::abs(a.x() * b.y() - a.y() * b.x()), a.dot(b))));
+            }
+        }
       }
       if (tops.empty()) return CrownVerdict::Disagree;
       std::sort(radii.begin(), radii.end());
       top = tops[tops.size() / 2], r = quantile(radii, cfg.radius_quantile);
+      // radii that agree (their interquartile range within radius_agreement of their median) seen
+      // from bearings agreement_bearings apart are one crown's, measured where nothing joined it:
+      // their median
+      const float median = quantile(radii, 0.5);
+      if (cfg.radius_agreement > 0 && bearings >= cfg.agreement_bearings &&
+          quantile(radii, 0.75) - quantile(radii, 0.25) <= cfg.radius_agreement * median)
+        r = median;
       return r < cfg.min_radius ? CrownVerdict::TooNarrow : CrownVerdict::Raised;
     }();
     // no crown from the samples: the bound samples (each a lower bound on the top) give the top's

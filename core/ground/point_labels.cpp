@@ -38,6 +38,17 @@ class ColumnGrid {
   std::vector<float> cells_;
 };
 
+// sorts nine values in place by a 25-comparator network (branch-free: min and max)
+void sortNine(std::array<float, 9>& a) {
+  static constexpr std::uint8_t kPairs[25][2] = {{0, 1}, {3, 4}, {6, 7}, {1, 2}, {4, 5}, {7, 8}, {0, 1}, {3, 4}, {6, 7},
+                                                 {0, 3}, {3, 6}, {0, 3}, {1, 4}, {4, 7}, {1, 4}, {2, 5}, {5, 8}, {2, 5},
+                                                 {1, 3}, {5, 7}, {2, 6}, {4, 6}, {2, 4}, {2, 3}, {5, 6}};
+  for (const auto& p : kPairs) {
+    const float lo = std::min(a[p[0]], a[p[1]]), hi = std::max(a[p[0]], a[p[1]]);
+    a[p[0]] = lo, a[p[1]] = hi;
+  }
+}
+
 }  // namespace
 
 std::int64_t scanColumnCount(const VoxelMap& map) {
@@ -73,18 +84,17 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4096), [&](const auto& r) {
     for (std::size_t v = r.begin(); v != r.end(); ++v) {
       const std::int64_t c = std::int64_t(lowest.at(voxels[v].index));
-      // insertion into a sorted run of at most nine
-      std::array<float, 9> around;
+      // the nine sorted by a network (kNone, +inf, sorts last); n of them hold ground
+      std::array<float, 9> a;
       int n = 0;
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
-        for (std::int64_t dx = -1; dx <= 1; ++dx) {
-          const float z = lowest[std::size_t(c + dy * stride + dx)];
-          if (z == kNone) continue;
-          int k = n++;
-          for (; k > 0 && around[k - 1] > z; --k) around[k] = around[k - 1];
-          around[k] = z;
+      for (int dy = -1, k = 0; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx, ++k) {
+          a[k] = lowest[std::size_t(c + dy * stride + dx)];
+          n += a[k] != kNone;
         }
-      if (n > 0) level[v] = around[(n - 1) / 2];
+      if (n == 0) continue;
+      sortNine(a);
+      level[v] = a[(n - 1) / 2];
     }
   });
 

@@ -399,6 +399,18 @@ TEST(CrownCompletionTest, ACrownCutOffByTheImageTopIsRaisedToItsBound) {
   }
 }
 
+// The tree's image with a grey screen nearer the camera hiding everything from `east` metres east
+// of the trunk rightwards.
+cv::Mat screenedEastOf(const Tree& tree, double east) {
+  cv::Mat cut = tree.image();
+  const auto edge = project(tree.k, tree.pose.inverse() * Point3(0.1 + east, 20.1, 8.0));
+  if (!edge) ADD_FAILURE() << "the screen's edge is not in the image";
+  const int u = edge ? static_cast<int>(edge->x()) + 1 : 0;
+  cv::rectangle(cut, cv::Point(u, 0), cv::Point(tree.k.width - 1, tree.k.height - 1), cv::Scalar(150, 150, 150),
+                cv::FILLED);
+  return cut;
+}
+
 // A grey screen nearer the camera hides everything from 1.5 m east of the trunk rightwards in five
 // frames of eight: those runs give a radius of 1.5 m, the three whole ones 3 m. The lower quartile
 // of the radii (crown.radius_quantile, 0.25 by default) takes the cut ones, and the ground 2 m from
@@ -410,12 +422,7 @@ TEST(CrownCompletionTest, TheRadiusIsTheConfiguredQuantileOfTheSamplesRadii) {
     cfg.min_baseline = 0;  // the same image stands for views along a baseline here
     cfg.radius_quantile = q;
     CrownSampler sampler;
-    const cv::Mat whole = tree.image();
-    cv::Mat cut = whole.clone();
-    const auto edge = project(tree.k, tree.pose.inverse() * Point3(0.1 + 1.5, 20.1, 8.0));
-    ASSERT_TRUE(edge);
-    cv::rectangle(cut, cv::Point(static_cast<int>(edge->x()) + 1, 0), cv::Point(tree.k.width - 1, tree.k.height - 1),
-                  cv::Scalar(150, 150, 150), cv::FILLED);
+    const cv::Mat whole = tree.image(), cut = screenedEastOf(tree, 1.5);
     for (const bool hidden : {true, false, true, true, false, true, false, true})
       EXPECT_EQ(sampler.measure(tree.mesh, tree.map, hidden ? cut : whole, tree.k, tree.pose, cfg,
                                 BoundaryEstimationConfig{}),
@@ -430,6 +437,36 @@ TEST(CrownCompletionTest, TheRadiusIsTheConfiguredQuantileOfTheSamplesRadii) {
     } else {
       tree.expectCap();
     }
+  }
+}
+
+// A grey screen nearer the camera hides everything from 2.6 m east of the trunk rightwards in three
+// frames of eight: those runs give a radius of about 2.6 m, the five whole ones 3 m. The radii agree
+// (their interquartile range within crown.radius_agreement, 0.3, of their median): seen from
+// bearings that spread at least crown.agreement_bearings (0 here), their median takes the whole
+// crown's cap; from one bearing only (the same camera for every frame) against the default 10
+// degrees, or with the agreement off, the lower quartile leaves the ground 2.8 m from the trunk.
+TEST(CrownCompletionTest, RadiiThatAgreeFromApartGiveTheirMedian) {
+  struct Case {
+    double agreement, bearings;
+    bool median;
+  };
+  for (const Case c : {Case{0.3, 0.0, true}, Case{0.3, CrownConfig{}.agreement_bearings, false}, Case{0, 0.0, false}}) {
+    Tree tree;
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.radius_agreement = c.agreement;
+    cfg.agreement_bearings = c.bearings;
+    CrownSampler sampler;
+    const cv::Mat whole = tree.image(), cut = screenedEastOf(tree, 2.6);
+    for (const bool hidden : {true, false, false, true, false, true, false, false})
+      ASSERT_EQ(sampler.measure(tree.mesh, tree.map, hidden ? cut : whole, tree.k, tree.pose, cfg,
+                                BoundaryEstimationConfig{}),
+                1);
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    EXPECT_EQ(tree.at(14, 100).raised(), c.median) << c.agreement << " " << c.bearings;  // 2.8 m from the trunk
+    if (c.median) tree.expectCap();
   }
 }
 

@@ -73,5 +73,29 @@ TEST(PointLabelsTest, APointInNoVoxelIsNotGround) {
   EXPECT_EQ(labels[1], 1);
 }
 
+// The level is the lower median of the lowest ground returns of the column and its eight
+// neighbours: nine columns whose lowest returns lie at 0, 1, ..., 8 cm (in no order) give 4 cm, so
+// a return of the middle column 13.5 cm up is ground and one 14.5 cm up is not; without the
+// north-east column (8 cm) the lower median of eight is 3 cm, and 13.5 cm up is not ground either.
+TEST(PointLabelsTest, TheLevelIsTheLowerMedianOfTheNineColumnsLowestGround) {
+  for (const bool all_nine : {true, false}) {
+    std::vector<Point3> points;
+    const int lowest_cm[3][3] = {{5, 0, 7}, {2, 6, 1}, {3, 4, 8}};  // [j][i]: column (i, j)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i)
+        if (all_nine || i != 2 || j != 2) points.emplace_back(0.1 + 0.2 * i, 0.1 + 0.2 * j, 0.01 * lowest_cm[j][i]);
+    const std::size_t low = points.size(), high = low + 1;
+    points.emplace_back(0.3, 0.3, 0.135);
+    points.emplace_back(0.3, 0.3, 0.145);
+    VoxelMap map{VoxelMapConfig{}};
+    std::vector<std::uint32_t> voxel_of;
+    map.insert(points, 0, nullptr, &voxel_of);
+    const std::vector<std::uint8_t> voxel_ground(map.size(), 1);
+    const auto labels = labelScanPoints(map, points, voxel_of, voxel_ground, GroundSegmentationConfig{});
+    EXPECT_EQ(labels[low], all_nine ? 1 : 0) << all_nine;
+    EXPECT_EQ(labels[high], 0) << all_nine;
+  }
+}
+
 }  // namespace
 }  // namespace terrain
