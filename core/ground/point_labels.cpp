@@ -28,7 +28,6 @@ class ColumnGrid {
         cells_(std::size_t(nx_ * ny_), fill) {}
   // [0, size()) for a voxel index's column (with a margin of one column each way inside the grid)
   std::size_t at(const VoxelIndex& v) const { return std::size_t((v.y() - y0_) * nx_ + (v.x() - x0_)); }
-  std::size_t size() const { return cells_.size(); }
   std::int64_t stride() const { return nx_; }
   float& operator[](std::size_t i) { return cells_[i]; }
   float operator[](std::size_t i) const { return cells_[i]; }
@@ -78,9 +77,12 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
   }
 
   // the ground's level at each voxel's column: the lower median of the lowest ground points of the
-  // column and its eight neighbours (kNone: no ground there)
+  // column and its eight neighbours (kNone: no ground there); and the highest a ground return may
+  // stand there: point_rise above the level, plus what the ground rises across one column, from
+  // the mean lowest of the columns on either side along x and along y (where both sides hold ground)
   const std::int64_t stride = lowest.stride();
-  std::vector<float> level(voxels.size(), kNone);
+  const float rise = static_cast<float>(config.point_rise), reach = static_cast<float>(config.point_reach);
+  std::vector<float> level(voxels.size(), kNone), ceiling(voxels.size(), kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4096), [&](const auto& r) {
     for (std::size_t v = r.begin(); v != r.end(); ++v) {
       const std::int64_t c = std::int64_t(lowest.at(voxels[v].index));
@@ -93,21 +95,32 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
           n += a[k] != kNone;
         }
       if (n == 0) continue;
+      // the rise across a column along one axis: half the difference of the sides' means
+      const auto across = [&](int k0, int k1, int k2, int j0, int j1, int j2) {
+        float lo = 0, hi = 0;
+        int nl = 0, nh = 0;
+        for (const int k : {k0, k1, k2})
+          if (a[k] != kNone) lo += a[k], ++nl;
+        for (const int k : {j0, j1, j2})
+          if (a[k] != kNone) hi += a[k], ++nh;
+        return nl > 0 && nh > 0 ? 0.5f * std::abs(hi / nh - lo / nl) : 0.0f;
+      };
+      const float slope_rise = across(0, 3, 6, 2, 5, 8) + across(0, 1, 2, 6, 7, 8);
       sortNine(a);
       level[v] = a[(n - 1) / 2];
+      ceiling[v] = level[v] + rise + slope_rise;
     }
   });
 
-  // a point of a ground voxel standing more than point_rise above the level stands on the ground;
-  // a point of a non-ground voxel within point_reach of it continues the ground beside it
-  const float rise = static_cast<float>(config.point_rise), reach = static_cast<float>(config.point_reach);
+  // a point of a ground voxel above the ceiling stands on the ground; a point of a non-ground voxel
+  // within point_reach of the level continues the ground beside it
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 8192), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       if (voxel_of[i] == VoxelMap::kNoVoxel) continue;
       const float m = level[voxel_of[i]];
       if (m == kNone) continue;
-      const float above = static_cast<float>(points[i].z()) - m;
-      out[i] = out[i] ? above <= rise : std::abs(above) <= reach;
+      const float z = static_cast<float>(points[i].z());
+      out[i] = out[i] ? z <= ceiling[voxel_of[i]] : std::abs(z - m) <= reach;
     }
   });
   return out;

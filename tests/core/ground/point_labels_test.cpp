@@ -74,27 +74,54 @@ TEST(PointLabelsTest, APointInNoVoxelIsNotGround) {
 }
 
 // The level is the lower median of the lowest ground returns of the column and its eight
-// neighbours: nine columns whose lowest returns lie at 0, 1, ..., 8 cm (in no order) give 4 cm, so
-// a return of the middle column 13.5 cm up is ground and one 14.5 cm up is not; without the
-// north-east column (8 cm) the lower median of eight is 3 cm, and 13.5 cm up is not ground either.
+// neighbours: nine columns whose lowest returns lie at 10, 11, ..., 18 cm (in no order) give 14 cm.
+// A return 23.5 cm up in the middle column, in a non-ground voxel (the one above), lies within a
+// point_reach of 10 cm of it and is ground; without the north-east column (18 cm) the lower median
+// of eight is 13 cm, and the same return is not. One 25 cm up is ground in neither.
 TEST(PointLabelsTest, TheLevelIsTheLowerMedianOfTheNineColumnsLowestGround) {
   for (const bool all_nine : {true, false}) {
     std::vector<Point3> points;
-    const int lowest_cm[3][3] = {{5, 0, 7}, {2, 6, 1}, {3, 4, 8}};  // [j][i]: column (i, j)
+    const int lowest_cm[3][3] = {{15, 10, 17}, {12, 16, 11}, {13, 14, 18}};  // [j][i]: column (i, j)
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 3; ++i)
         if (all_nine || i != 2 || j != 2) points.emplace_back(0.1 + 0.2 * i, 0.1 + 0.2 * j, 0.01 * lowest_cm[j][i]);
-    const std::size_t low = points.size(), high = low + 1;
-    points.emplace_back(0.3, 0.3, 0.135);
-    points.emplace_back(0.3, 0.3, 0.145);
+    const std::size_t near = points.size(), far = near + 1;
+    points.emplace_back(0.3, 0.3, 0.235);
+    points.emplace_back(0.3, 0.3, 0.25);
     VoxelMap map{VoxelMapConfig{}};
     std::vector<std::uint32_t> voxel_of;
     map.insert(points, 0, nullptr, &voxel_of);
-    const std::vector<std::uint8_t> voxel_ground(map.size(), 1);
-    const auto labels = labelScanPoints(map, points, voxel_of, voxel_ground, GroundSegmentationConfig{});
-    EXPECT_EQ(labels[low], all_nine ? 1 : 0) << all_nine;
-    EXPECT_EQ(labels[high], 0) << all_nine;
+    std::vector<std::uint8_t> voxel_ground(map.size(), 1);
+    voxel_ground[voxel_of[near]] = 0;
+    GroundSegmentationConfig cfg;
+    cfg.point_reach = 0.1;
+    const auto labels = labelScanPoints(map, points, voxel_of, voxel_ground, cfg);
+    EXPECT_EQ(labels[near], all_nine ? 1 : 0) << all_nine;
+    EXPECT_EQ(labels[far], 0) << all_nine;
   }
+}
+
+// On ground rising 15 cm across a column (z = 0.75 x), a column's returns at its downhill and
+// uphill edges lie 13.5 cm apart: the uphill one is within point_rise (10 cm) plus that rise of the
+// level (the column's own lowest, the median of its row) and stays ground; a return 30 cm above
+// the ground does not.
+TEST(PointLabelsTest, OnASlopeTheRiseAcrossAColumnIsAllowed) {
+  std::vector<Point3> points;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j)
+      for (const double x : {0.2 * i + 0.01, 0.2 * i + 0.19}) points.emplace_back(x, 0.2 * j + 0.1, 0.75 * x);
+  const std::size_t uphill = 2 * (2 * 5 + 2) + 1;  // column (2, 2), its uphill return
+  const std::size_t above = points.size();
+  points.emplace_back(0.5, 0.5, 0.75 * 0.5 + 0.3);
+  VoxelMap map{VoxelMapConfig{}};
+  std::vector<std::uint32_t> voxel_of;
+  map.insert(points, 0, nullptr, &voxel_of);
+  const std::vector<std::uint8_t> voxel_ground(map.size(), 1);
+  const auto labels = labelScanPoints(map, points, voxel_of, voxel_ground, GroundSegmentationConfig{});
+  ASSERT_NEAR(points[uphill].x(), 0.59, 1e-12);
+  EXPECT_EQ(labels[uphill], 1);
+  EXPECT_EQ(labels[uphill - 1], 1);
+  EXPECT_EQ(labels[above], 0);
 }
 
 }  // namespace
