@@ -51,19 +51,14 @@ class KittiCommand : public Command {
       label_path.replace_extension(".label");
       const auto labels = rig::readSemanticKittiLabels(label_path, scan.points.size());
       const auto j = eval::scoreKittiScan(scan.points, labels, config_.voxel_map, config_.ground, sensor_height_);
-      for (const char* m : eval::kGroundMethods) {
-        std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22) << m << std::right
-                  << j[m]["f1"].get<double>() << "  " << j[m]["iou"].get<double>() << "  "
-                  << j[m]["precision"].get<double>() << "     " << j[m]["recall"].get<double>() << "\n";
-      }
+      const auto row = [&](const std::string& method, const nlohmann::json& scores) {
+        std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22) << method << std::right
+                  << scores["f1"].get<double>() << "  " << scores["iou"].get<double>() << "  "
+                  << scores["precision"].get<double>() << "     " << scores["recall"].get<double>() << "\n";
+      };
+      for (const char* m : eval::kGroundMethods) row(m, j[m]);
       // the GMRF's own share: its voxel labels before the per-point step
-      for (const char* m : {"gmrf_icm", "gmrf_mincut"}) {
-        const auto& v = j["voxel_labels"][m];
-        std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22)
-                  << (std::string(m) + " voxels") << std::right << v["f1"].get<double>() << "  "
-                  << v["iou"].get<double>() << "  " << v["precision"].get<double>() << "     "
-                  << v["recall"].get<double>() << "\n";
-      }
+      for (const char* m : {"gmrf_icm", "gmrf_mincut"}) row(std::string(m) + " voxels", j["voxel_labels"][m]);
       // where the configured solver calls ground wrongly
       const auto& conf = j["confusion"];
       std::vector<std::pair<std::uint64_t, std::string>> wrong;

@@ -4,12 +4,11 @@
 #include "evaluation/metrics.hpp"
 #include "rig/kitti.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <chrono>
 #include <cstring>
 #include <map>
 #include <string>
+#include <utility>
 
 namespace terrain::eval {
 
@@ -17,13 +16,28 @@ using nlohmann::json;
 
 namespace {
 
-// each point takes the label of the voxel it fell in (0 for a point in none)
-std::vector<std::uint8_t> pointLabels(const std::vector<std::uint32_t>& voxel_of,
-                                      const std::vector<std::uint8_t>& voxel_labels) {
-  std::vector<std::uint8_t> out(voxel_of.size(), 0);
-  tbb::parallel_for(std::size_t{0}, voxel_of.size(), [&](std::size_t i) {
-    if (voxel_of[i] != VoxelMap::kNoVoxel) out[i] = voxel_labels[voxel_of[i]];
-  });
+// One scan segmented once: per point the GMRF's labels after the per-point step, the same voxel
+// labels without it and the histogram's rough classes, and the time the first took [ms].
+struct ScanLabels {
+  std::vector<std::uint8_t> points, voxels, rough;
+  double milliseconds = 0;
+};
+ScanLabels labelScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
+                     const GroundSegmentationConfig& ground, bool voxel_labels_too) {
+  ScanLabels out;
+  const auto t0 = std::chrono::steady_clock::now();
+  VoxelMap map(voxels);
+  std::vector<std::uint32_t> voxel_of;
+  map.insert(points, 0, nullptr, &voxel_of);
+  const SegmentationResult result = segmentGroundLabels(map, ground);
+  out.points = labelScanPoints(map, points, voxel_of, result.refined, ground);
+  out.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (voxel_labels_too) {
+    GroundSegmentationConfig as_voxels = ground;
+    as_voxels.point_rise = 0;
+    out.voxels = labelScanPoints(map, points, voxel_of, result.refined, as_voxels);
+    out.rough = labelScanPoints(map, points, voxel_of, result.rough, as_voxels);
+  }
   return out;
 }
 
@@ -31,15 +45,9 @@ std::vector<std::uint8_t> pointLabels(const std::vector<std::uint32_t>& voxel_of
 
 std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
                                       const GroundSegmentationConfig& ground, double* milliseconds) {
-  const auto t0 = std::chrono::steady_clock::now();
-  VoxelMap map(voxels);
-  std::vector<std::uint32_t> voxel_of;
-  map.insert(points, 0, nullptr, &voxel_of);
-  const std::vector<std::uint8_t> out =
-      labelScanPoints(map, points, voxel_of, segmentGroundLabels(map, ground).refined, ground);
-  if (milliseconds)
-    *milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return out;
+  ScanLabels labels = labelScan(points, voxels, ground, false);
+  if (milliseconds) *milliseconds = labels.milliseconds;
+  return std::move(labels.points);
 }
 
 json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
@@ -114,30 +122,24 @@ json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::ui
   };
   json j;
   j["points"] = points.size();
+  // each solver once: its labels per point, its voxel labels before the per-point step (the GMRF's
+  // own share) and, of the configured one, where it errs and the histogram's rough classes (they do
+  // not depend on the solver)
   GroundSegmentationConfig g = ground;
-  double ms = 0;
   g.solver = GroundSegmentationConfig::Solver::Icm;
-  j["gmrf_icm"] = score(segmentScan(points, voxels, g, &ms));
-  j["gmrf_icm"]["time_ms"] = ms;
+  const ScanLabels icm = labelScan(points, voxels, g, true);
   g.solver = GroundSegmentationConfig::Solver::MinCut;
-  j["gmrf_mincut"] = score(segmentScan(points, voxels, g, &ms));
-  j["gmrf_mincut"]["time_ms"] = ms;
-  // the GMRF's voxel labels as they are, before the per-point step
-  g.point_rise = 0;
-  g.solver = GroundSegmentationConfig::Solver::Icm;
-  j["voxel_labels"]["gmrf_icm"] = score(segmentScan(points, voxels, g));
-  g.solver = GroundSegmentationConfig::Solver::MinCut;
-  j["voxel_labels"]["gmrf_mincut"] = score(segmentScan(points, voxels, g));
-  // where the configured solver errs
-  j["confusion"] = kittiConfusion(points, labels, segmentScan(points, voxels, ground));
-  j["confusion"]["method"] = ground.solver == GroundSegmentationConfig::Solver::Icm ? "gmrf_icm" : "gmrf_mincut";
-  // the histogram alone: rough labels of the same map
-  {
-    VoxelMap map(voxels);
-    std::vector<std::uint32_t> voxel_of;
-    map.insert(points, 0, nullptr, &voxel_of);
-    j["histogram"] = score(pointLabels(voxel_of, segmentGroundLabels(map, ground).rough));
+  const ScanLabels cut = labelScan(points, voxels, g, true);
+  for (const auto& [name, s] : {std::pair<const char*, const ScanLabels*>{"gmrf_icm", &icm}, {"gmrf_mincut", &cut}}) {
+    j[name] = score(s->points);
+    j[name]["time_ms"] = s->milliseconds;
+    j["voxel_labels"][name] = score(s->voxels);
   }
+  const bool by_icm = ground.solver == GroundSegmentationConfig::Solver::Icm;
+  const ScanLabels& configured = by_icm ? icm : cut;
+  j["confusion"] = kittiConfusion(points, labels, configured.points);
+  j["confusion"]["method"] = by_icm ? "gmrf_icm" : "gmrf_mincut";
+  j["histogram"] = score(configured.rough);
   j["fixed_band"] = score(groundByFixedBand(points, {Point3(0, 0, -sensor_height)}, ground.delta));
   j["ransac_plane"] = score(groundByRansacPlane(points, 0.2));
   j["morphological_filter"] = score(groundByMorphologicalFilter(points, MorphologicalFilterConfig{}));

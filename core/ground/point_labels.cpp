@@ -63,8 +63,10 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
   std::vector<std::uint8_t> out(points.size(), 0);
   const auto& voxels = map.voxels();
   // each point takes its voxel's label (0 for a point in none)
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (voxel_of[i] != VoxelMap::kNoVoxel) out[i] = voxel_ground[voxel_of[i]];
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 8192), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i)
+      if (voxel_of[i] != VoxelMap::kNoVoxel) out[i] = voxel_ground[voxel_of[i]];
+  });
   if (config.point_rise <= 0 || map.size() == 0 || scanColumnCount(map) > kMaxScanColumns) return out;
 
   // the lowest point of each column among those its ground voxels hold
