@@ -335,8 +335,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       count(*failed);
       continue;
     }
-    const auto along = [&](double row) { return rayAt(i, row); };
-    const Vector3 dir = along(top + 0.5);
+    const Vector3 dir = rayAt(i, top + 0.5);
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
     double radius = (half + 0.5) * views[i].depth / k.fx;
     if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) {
@@ -346,7 +345,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     // a crown is at most max_width_to_depth times as wide as it is deep (its top above its lowest
     // pixel on the vertical): wider, the runs took in crowns behind it on both sides. A crown cut
     // off by the image top is deeper than it shows: no bound
-    const double lowest = heightAbove(centre, along(bottom + 1.0), t.centre.x(), t.centre.y());
+    const double lowest = heightAbove(centre, rayAt(i, bottom + 1.0), t.centre.x(), t.centre.y());
     if (!cut && std::isfinite(lowest) && cfg.max_width_to_depth > 0)
       radius = std::min(radius, 0.5 * cfg.max_width_to_depth * std::max(0.0, height - lowest));
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
