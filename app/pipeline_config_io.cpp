@@ -139,6 +139,9 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("crown.radius_agreement", c.crown.radius_agreement, closed(0, 10));
   v.number("crown.agreement_bearings", c.crown.agreement_bearings, closed(0, 3.2, "rad"));
   v.flag("crown.axis_ceiling", c.crown.axis_ceiling);
+  v.flag("crown.column_tops", c.crown.column_tops);
+  v.number("crown.column_radius_quantile", c.crown.column_radius_quantile, closed(0, 1));
+  v.number("crown.column_min_bare", c.crown.column_min_bare, closed(0, 50, "m"));
   v.number("crown.ceiling_halfwidth", c.crown.ceiling_halfwidth, closed(0, 5, "m"));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);

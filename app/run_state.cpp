@@ -325,7 +325,7 @@ SavedRun readRunState(const fs::path& out) {
     c.centre = Eigen::Vector2f(x, y);
     for (std::uint16_t& n : c.outcomes) n = p.get<std::uint16_t>("crown record outcomes");
     const auto verdict = p.get<std::uint8_t>("crown record verdict");
-    if (verdict > static_cast<std::uint8_t>(CrownVerdict::RaisedToBound))
+    if (verdict > static_cast<std::uint8_t>(CrownVerdict::RaisedFromColumns))
       p.fail("crown record verdict " + std::to_string(verdict) + " is unknown");
     c.verdict = static_cast<CrownVerdict>(verdict);
   }

@@ -112,6 +112,8 @@ const char* verdictName(CrownVerdict verdict) {
       return "raised";
     case CrownVerdict::RaisedToBound:
       return "raised_to_bound";
+    case CrownVerdict::RaisedFromColumns:
+      return "raised_from_columns";
   }
   return "unknown";
 }
@@ -228,9 +230,12 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     std::optional<CrownOutcome> failed;
     bool cut = false;
     int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, half = 0, own = 0;
+    // the crown's lowest row over the bare trunk on the first walk, and the top row of the crown the
+    // last walk went up (-1: it met none), for column samples
+    int first_bottom = -1, column_top = -1;
     double run_centre = 0;
     for (int start = v;;) {
-      top = start, bottom = start - 1;
+      top = start, bottom = start - 1, column_top = -1;
       if (foliage_cue) {
         // up the bare trunk (neither foliage nor sky) to the crown's lowest pixel, then up the crown
         int row = start;
@@ -243,8 +248,10 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         }
         bottom = row;
         top = row;
+        if (first_bottom < 0) first_bottom = row;
       }
       while (top - 1 >= 0 && inside(column(i, top - 1)) && crown(column(i, top - 1), top - 1)) --top;
+      column_top = top;
       // cut off by the image top (with cut_off_tops, a bound on the top from below), or too little
       // crown
       cut = top == 0;
@@ -333,6 +340,38 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     }
     if (failed) {
       count(*failed);
+      // the crown's column still bounds its top from above where a crown joined it (off centre, under
+      // another trunk's run, or touching the image's sides): a column sample
+      if (cfg.column_tops && foliage_cue && column_top > 0 && first_bottom >= 0 &&
+          (*failed == CrownOutcome::OffCentre || *failed == CrownOutcome::NearerTrunk ||
+           *failed == CrownOutcome::Unbounded)) {
+        const double height = heightAbove(centre, rayAt(i, column_top + 0.5), t.centre.x(), t.centre.y());
+        // the crown starts above the bare trunk the lidar saw (a crown whose foot the lidar reached
+        // may be all there is: what stands over it in the column is another's)
+        const double foot = heightAbove(centre, rayAt(i, first_bottom + 1.0), t.centre.x(), t.centre.y());
+        // a crown's apex stands over its trunk: the runs of the column's top rows (as many as the
+        // crown's top metre spans) centred on the vertical; one centred away is the shoulder of another
+        const int apex_rows = std::max(2, static_cast<int>(std::lround(k.fy / views[i].depth)));
+        double apex = 0;
+        int apex_n = 0, apex_width = 0;
+        for (int row = column_top; row < column_top + apex_rows; ++row) {
+          const int u = column(i, row);
+          if (!inside(u) || !crown(u, row)) break;
+          int left = u, right = u;
+          while (left - 1 >= 0 && crown(left - 1, row)) --left;
+          while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
+          apex += 0.5 * (left + right) - u, ++apex_n, apex_width = right - left + 1;
+        }
+        const bool centred = apex_n > 0 && std::abs(apex / apex_n) <= cfg.max_offcentre * apex_width + 1.0;
+        if (centred && std::isfinite(height) && std::isfinite(foot) && foot >= t.top + cfg.column_min_bare &&
+            height > foot && standsAboveGround(t, groundAround(t, mesh, map), cfg.min_trunk_height)) {
+          double radius = half > 0 ? (half + 0.5) * views[i].depth / k.fx : 0.0;
+          if (cfg.max_width_to_depth > 0) radius = std::min(radius, 0.5 * cfg.max_width_to_depth * (height - foot));
+          if (radius > cfg.max_radius) radius = 0;
+          columns_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius),
+                                     centre.head<2>().cast<float>(), t.centre.cast<float>(), false, true});
+        }
+      }
       continue;
     }
     const Vector3 dir = rayAt(i, top + 0.5);
@@ -362,7 +401,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     }
     count(cut ? CrownOutcome::CutOff : CrownOutcome::Measured);
     samples_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius), centre.head<2>().cast<float>(),
-                               t.centre.cast<float>(), cut});
+                               t.centre.cast<float>(), cut, false});
     ++measured;
   }
   return measured;
@@ -370,7 +409,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
 
 int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg, const SkyThrough& sky_through) {
   lowered_ = 0;
-  if (!cfg.enabled || (samples_.empty() && ceilings_.empty()) || mesh.vertices().empty()) return 0;
+  if (!cfg.enabled || (samples_.empty() && columns_.empty() && ceilings_.empty()) || mesh.vertices().empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   auto& vertices = mesh.vertices();
   const double cell = map.voxelSize();
@@ -447,6 +486,23 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     merged[to].insert(merged[to].end(), list.begin(), list.end());
     merged_keys[to].push_back(key);
   }
+  // the column samples as the ceilings below: to the trunk of their key, else to the narrow trunk
+  // nearest where they were taken, within 1 m, else to a grown trunk that took samples there
+  std::vector<std::vector<Sample>> columns(trunks.size());
+  std::vector<std::uint32_t> column_keys;
+  for (const auto& [key, list] : columns_) column_keys.push_back(key);
+  std::sort(column_keys.begin(), column_keys.end());
+  for (std::uint32_t key : column_keys) {
+    const std::vector<Sample>& list = columns_.at(key);
+    const Eigen::Vector2d seen_at = list.back().trunk.cast<double>();
+    std::size_t to = trunkOf(key, seen_at);
+    if (to == trunks.size()) {
+      const auto grown = grown_of_object.find(objectNear(seen_at));
+      if (grown == grown_of_object.end()) continue;
+      to = grown->second;
+    }
+    columns[to].insert(columns[to].end(), list.begin(), list.end());
+  }
   // the axis's ceilings go to the trunk of their key, else to the narrow trunk nearest where the
   // trunk was last seen, within 1 m, else to a grown trunk that took samples there
   std::vector<std::vector<float>> ceilings(trunks.size());
@@ -507,10 +563,12 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     };
     double ground = std::numeric_limits<double>::quiet_NaN();  // groundAround, once needed
     double top = 0, r = 0;
-    const CrownVerdict verdict = [&] {
-      if (static_cast<int>(samples.size()) < min_samples) return CrownVerdict::TooFewSamples;
+    // the crown from a list of samples (top and r), or why it gives none; the radii of column samples
+    // that no run bounded (0) say nothing
+    const auto fromSamples = [&](const std::vector<const Sample*>& list, double radius_quantile, bool agreement) {
+      if (static_cast<int>(list.size()) < min_samples) return CrownVerdict::TooFewSamples;
       // seen from far enough apart
-      if (baseline(samples) < cfg.min_baseline) return CrownVerdict::NoBaseline;
+      if (baseline(list) < cfg.min_baseline) return CrownVerdict::NoBaseline;
       ground = groundAround(t, mesh, map);  // also for the tops' agreement below
       if (!standsAboveGround(t, ground, cfg.min_trunk_height)) return CrownVerdict::Sunk;
       // A sample bounds the crown's top from above: foliage above the crown in its column (a taller
@@ -520,7 +578,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       // the lowest group with min_samples samples whose cameras spread min_baseline gives the crown:
       // its median top, and the radius_quantile of its radii (a run widened by a crown beside it
       // errs only upwards).
-      std::vector<const Sample*> by_top = samples;
+      std::vector<const Sample*> by_top = list;
       std::stable_sort(by_top.begin(), by_top.end(), [](const Sample* a, const Sample* b) { return a->top < b->top; });
       // do the cameras of samples [first, end) of by_top lie min_baseline apart? (their bounding box
       // decides most groups; the pairs only the rest)
@@ -539,34 +597,44 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       };
       const double foot = std::isfinite(ground) ? ground : t.top;
       std::vector<float> tops, radii;
-      double bearings = 0;  // [rad] the widest angle at the trunk between two of the group's cameras
+      // [rad] the widest angle at the trunk between two cameras of samples [first, end) of by_top,
+      // once it reaches `enough` no wider
+      const auto widestBearings = [&](std::size_t first, std::size_t end, double enough) {
+        double widest = 0;
+        for (std::size_t i = first; i < end && widest < enough; ++i)
+          for (std::size_t j = i + 1; j < end && widest < enough; ++j) {
+            const Eigen::Vector2f a = by_top[i]->camera - by_top[i]->trunk, b = by_top[j]->camera - by_top[j]->trunk;
+            widest =
+                std::max(widest, static_cast<double>(std::atan2(std::abs(a.x() * b.y() - a.y() * b.x()), a.dot(b))));
+          }
+        return widest;
+      };
+      double bearings = 0;  // [rad] the group's widest bearings, up to what radius_agreement asks
       for (std::size_t first = 0; first < by_top.size() && tops.empty(); ++first) {
         const double lowest = by_top[first]->top, reach = lowest + cfg.max_top_spread * std::max(0.0, lowest - foot);
         std::size_t end = first;
         while (end < by_top.size() && by_top[end]->top <= reach) ++end;
         if (static_cast<int>(end - first) < min_samples || !spread(first, end)) continue;
-        for (std::size_t i = first; i < end; ++i) tops.push_back(by_top[i]->top), radii.push_back(by_top[i]->radius);
-        if (cfg.radius_agreement > 0) {
-          for (std::size_t i = first; i < end; ++i)
-            for (std::size_t j = i + 1; j < end; ++j) {
-              const Eigen::Vector2f a = by_top[i]->camera - by_top[i]->trunk, b = by_top[j]->camera - by_top[j]->trunk;
-              bearings = std::max(bearings,
-                                  static_cast<double>(std::atan2(std::abs(a.x() * b.y() - a.y() * b.x()), a.dot(b))));
-            }
+        for (std::size_t i = first; i < end; ++i) {
+          tops.push_back(by_top[i]->top);
+          if (!by_top[i]->column || by_top[i]->radius > 0) radii.push_back(by_top[i]->radius);
         }
+        if (agreement && cfg.radius_agreement > 0) bearings = widestBearings(first, end, cfg.agreement_bearings);
       }
       if (tops.empty()) return CrownVerdict::Disagree;
+      if (radii.empty()) return CrownVerdict::TooNarrow;
       std::sort(radii.begin(), radii.end());
-      top = tops[tops.size() / 2], r = quantile(radii, cfg.radius_quantile);
+      top = tops[tops.size() / 2], r = quantile(radii, radius_quantile);
       // radii that agree (their interquartile range within radius_agreement of their median) seen
       // from bearings agreement_bearings apart are one crown's, measured where nothing joined it:
       // their median
       const float median = quantile(radii, 0.5);
-      if (cfg.radius_agreement > 0 && bearings >= cfg.agreement_bearings &&
+      if (agreement && cfg.radius_agreement > 0 && bearings >= cfg.agreement_bearings &&
           quantile(radii, 0.75) - quantile(radii, 0.25) <= cfg.radius_agreement * median)
         r = median;
       return r < cfg.min_radius ? CrownVerdict::TooNarrow : CrownVerdict::Raised;
-    }();
+    };
+    const CrownVerdict verdict = fromSamples(samples, cfg.radius_quantile, true);
     // no crown from the samples: the bound samples (each a lower bound on the top) give the top's
     // cut_off_quantile and the radius_quantile of their radii
     const auto fromBounds = [&] {
@@ -582,10 +650,19 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
       return r >= cfg.min_radius;
     };
     CrownVerdict outcome = verdict;
-    if (verdict != CrownVerdict::Raised && verdict != CrownVerdict::Sunk && verdict != CrownVerdict::TooNarrow &&
-        fromBounds())
-      outcome = CrownVerdict::RaisedToBound;
-    if (outcome != CrownVerdict::Raised && outcome != CrownVerdict::RaisedToBound) {
+    if (verdict != CrownVerdict::Raised && verdict != CrownVerdict::Sunk && verdict != CrownVerdict::TooNarrow) {
+      if (fromBounds()) {
+        outcome = CrownVerdict::RaisedToBound;
+      } else if (!columns[ti].empty()) {
+        // the samples and the column samples together
+        std::vector<const Sample*> all = samples;
+        for (const Sample& s : columns[ti]) all.push_back(&s);
+        if (fromSamples(all, cfg.column_radius_quantile, false) == CrownVerdict::Raised)
+          outcome = CrownVerdict::RaisedFromColumns;
+      }
+    }
+    if (outcome != CrownVerdict::Raised && outcome != CrownVerdict::RaisedToBound &&
+        outcome != CrownVerdict::RaisedFromColumns) {
       judge(outcome);
       continue;
     }

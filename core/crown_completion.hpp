@@ -175,6 +175,22 @@ struct CrownConfig {
   // crowns are measured.
   bool axis_ceiling = true;
   double ceiling_halfwidth = 0.5;  // [m]
+  // Column samples: a frame whose crown another joined (off_centre, nearer_trunk, unbounded) still
+  // shows the crown's column up to its highest foliage pixel over the trunk, and what joins it there
+  // (a crown behind or before) only lifts it. Such a frame gives a column sample where the crown's
+  // apex is centred over the vertical (the runs of the top metre's rows within max_offcentre) and
+  // its foot lies column_min_bare above the lidar's top on the trunk (where the lidar reached the
+  // crown, what stands over it in the column may be another's). A trunk whose samples give no crown
+  // takes its top from the lowest agreeing group of all its samples, column samples among them
+  // (verdict raised_from_columns), its radius the column_radius_quantile of the group's radii.
+  // Off by default: on 60 frames of every terrain type it took the object-cell MAE 8.13 -> 7.81 m on
+  // seeds 50 and 51 and 8.07 -> 8.03 m on seeds 55 and 56 (fresh), trees at their height 366 -> 380
+  // and 369 -> 375, but the terrain cells raised by mistake 198.9 -> 203.8 and 204.9 -> 277.1 a run
+  // (mixed 56: 65 -> 370, its MAE 8.99 -> 9.13 m); with the radius quantile at 0.25, 7.78 and 7.92 m,
+  // 204.5 and 367.6 cells (docs/results.md, 2026-12-07, sixth part).
+  bool column_tops = false;
+  double column_min_bare = 1.0;       // [m] bare trunk between the lidar's top on it and the crown's foot
+  double column_radius_quantile = 0;  // of the group's radii (a run a crown joined errs upwards)
 };
 
 // A trunk-sized object of the mesh: where it stands and how high the lidar saw it.
@@ -222,15 +238,17 @@ enum class CrownOutcome : std::uint8_t {
 constexpr std::size_t kCrownOutcomes = 10;
 // What the end of the run made of a trunk's samples.
 enum class CrownVerdict : std::uint8_t {
-  NotApplied,     // not judged (the run did not end, or the trunk is no longer one nor an object
-                  // within the crown's radius of it)
-  TooFewSamples,  // fewer than min_samples
-  NoBaseline,     // the samples' cameras within min_baseline of each other
-  Sunk,           // the trunk no longer stands min_trunk_height above its ground
-  Disagree,       // no group of samples within max_top_spread of each other has min_samples seen from min_baseline
-  TooNarrow,      // the radius below min_radius
-  Raised,         // the ground under its crown raised
-  RaisedToBound,  // no crown from its samples; the ground under it raised to its bound samples' top
+  NotApplied,         // not judged (the run did not end, or the trunk is no longer one nor an object
+                      // within the crown's radius of it)
+  TooFewSamples,      // fewer than min_samples
+  NoBaseline,         // the samples' cameras within min_baseline of each other
+  Sunk,               // the trunk no longer stands min_trunk_height above its ground
+  Disagree,           // no group of samples within max_top_spread of each other has min_samples seen from min_baseline
+  TooNarrow,          // the radius below min_radius
+  Raised,             // the ground under its crown raised
+  RaisedToBound,      // no crown from its samples; the ground under it raised to its bound samples' top
+  RaisedFromColumns,  // no crown from its samples alone; raised to the lowest agreeing group of them
+                      // and its column samples (CrownConfig::column_tops)
 };
 // names in reports: measured, no_crown, too_short, unbounded, off_centre, nearer_trunk,
 // implausible, not_clear, not_above_ground, cut_off; not_applied, too_few_samples, no_baseline,
@@ -293,8 +311,10 @@ class CrownSampler {
     Eigen::Vector2f camera;  // [m] where the camera was (x, y)
     Eigen::Vector2f trunk;   // [m] where the trunk stood (x, y)
     bool bound = false;      // the crown cut off by the image top: `top` bounds it from below
+    bool column = false;     // a column sample (CrownConfig::column_tops): `top` bounds it from above
   };
   std::unordered_map<std::uint32_t, std::vector<Sample>> samples_;  // by the trunk's lowest vertex id
+  std::unordered_map<std::uint32_t, std::vector<Sample>> columns_;  // column samples, by the same key
   std::unordered_map<std::uint32_t, CrownRecord> records_;          // by the same key
   std::unordered_map<std::uint32_t, std::vector<float>> ceilings_;  // [m] the axis's ceilings, by the same key
   int lowered_ = 0;

@@ -783,6 +783,52 @@ TEST(CrownCompletionTest, OneSidedRunsFollowACrownJoinedOnOneSideToItsWidestRow)
   }
 }
 
+// Foliage behind the crown joins its right side below the apex and widens smoothly down to the
+// crown's foot (each row's end 2.3 px further out: no jump), so the widest run is centred 70 px
+// east of the trunk and no frame gives a sample (off_centre). The crown's column still shows its top,
+// with its apex centred over the trunk and a bare trunk below it: column samples raise the crown's
+// cap. Foliage whose shoulder covers the column's top (a crown behind, its apex 23 px east and 52 px
+// above the crown's) gives none, and neither does a crown whose foot lies within column_min_bare of
+// the lidar's top on the trunk.
+TEST(CrownCompletionTest, AJoinedCrownsColumnStillGivesItsTop) {
+  struct Case {
+    bool column_tops, shoulder;
+    double min_bare;
+    bool raised;
+  };
+  for (const Case c : {Case{true, false, 1.0, true}, Case{false, false, 1.0, false}, Case{true, true, 1.0, false},
+                       Case{true, false, 2.5, false}}) {
+    Tree tree;
+    cv::Mat rgb = tree.image();
+    const auto centre = project(tree.k, tree.pose.inverse() * Point3(0.1, 20.1, 8.0));
+    ASSERT_TRUE(centre);
+    const double r = tree.k.fx * std::asin(3.0 / 20.0);
+    const int u = static_cast<int>(std::lround(centre->x())), top = static_cast<int>(std::lround(centre->y() - r));
+    const std::vector<cv::Point> behind{{u + 2, top + 20}, {u + 160, top + 90}, {u + 2, top + 90}};
+    cv::fillConvexPoly(rgb, behind, cv::Scalar(40, 110, 30));
+    if (c.shoulder) {
+      cv::circle(rgb,
+                 cv::Point(u + static_cast<int>(std::lround(0.5 * r)), top - static_cast<int>(std::lround(0.3 * r))),
+                 static_cast<int>(std::lround(0.8 * r)), cv::Scalar(40, 110, 30), cv::FILLED);
+    }
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.column_tops = c.column_tops;
+    cfg.column_min_bare = c.min_bare;  // the crown's foot is 2 m above the lidar's 3 m
+    CrownSampler sampler;
+    for (int frame = 0; frame < 3; ++frame)
+      ASSERT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 0);
+    EXPECT_EQ(sampler.records()[0].outcomes[static_cast<std::size_t>(CrownOutcome::OffCentre)], 3);
+    EXPECT_EQ(sampler.apply(tree.mesh, tree.map, cfg) > 0, c.raised);
+    EXPECT_EQ(sampler.records()[0].verdict, c.raised ? CrownVerdict::RaisedFromColumns : CrownVerdict::TooFewSamples);
+    if (c.raised) {
+      tree.expectCap();
+    } else {
+      EXPECT_FALSE(tree.at(1, 100).raised());
+    }
+  }
+}
+
 // With crown.sky_guard, a vertex under the cap through which the sky showed (here: every point more
 // than 1.5 m east of the trunk, at any height) is left alone; without it the cap is whole.
 TEST(CrownCompletionTest, TheSkyGuardLeavesAloneTheCapsVerticesTheSkyShowedThrough) {
