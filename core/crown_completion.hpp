@@ -252,7 +252,7 @@ enum class CrownVerdict : std::uint8_t {
 };
 // names in reports: measured, no_crown, too_short, unbounded, off_centre, nearer_trunk,
 // implausible, not_clear, not_above_ground, cut_off; not_applied, too_few_samples, no_baseline,
-// sunk, disagree, too_narrow, raised, raised_to_bound
+// sunk, disagree, too_narrow, raised, raised_to_bound, raised_from_columns
 const char* outcomeName(CrownOutcome outcome);
 const char* verdictName(CrownVerdict verdict);
 
