@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 namespace terrain {
 
@@ -186,6 +187,13 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     return static_cast<int>(std::floor(verticals.columnAt(views[i].px, row + 0.5)));
   };
   const auto inside = [&](int u) { return u >= 0 && u < rgb.cols; };
+  // the run of crown pixels of `row` around column u: its first and last column
+  const auto runAround = [&](int u, int row) {
+    int left = u, right = u;
+    while (left - 1 >= 0 && crown(left - 1, row)) --left;
+    while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
+    return std::pair<int, int>(left, right);
+  };
   // the ray through the vertical of trunk i at `row` (world frame)
   const auto rayAt = [&](std::size_t i, double row) {
     return Vector3(world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, row), row)));
@@ -278,9 +286,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       for (int row = top; row <= bottom; ++row) {
         const int u = column(i, row);
         if (!inside(u)) break;
-        int left = u, right = u;
-        while (left - 1 >= 0 && crown(left - 1, row)) --left;
-        while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
+        const auto [left, right] = runAround(u, row);
         if ((left == 0 && !joined_left) || (right == rgb.cols - 1 && !joined_right)) {
           if (cut && bounded == 0) continue;
           break;
@@ -357,9 +363,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         for (int row = column_top; row < column_top + apex_rows; ++row) {
           const int u = column(i, row);
           if (!inside(u) || !crown(u, row)) break;
-          int left = u, right = u;
-          while (left - 1 >= 0 && crown(left - 1, row)) --left;
-          while (right + 1 < rgb.cols && crown(right + 1, row)) ++right;
+          const auto [left, right] = runAround(u, row);
           apex += 0.5 * (left + right) - u, ++apex_n, apex_width = right - left + 1;
         }
         const bool centred = apex_n > 0 && std::abs(apex / apex_n) <= cfg.max_offcentre * apex_width + 1.0;
@@ -486,25 +490,25 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
     merged[to].insert(merged[to].end(), list.begin(), list.end());
     merged_keys[to].push_back(key);
   }
-  // the column samples as the ceilings below: to the trunk of their key, else to the narrow trunk
-  // nearest where they were taken, within 1 m, else to a grown trunk that took samples there
+  // the trunk of the key, else the narrow trunk nearest seen_at within 1 m, else a grown trunk that
+  // took samples there; trunks.size() if none (the column samples and the axis's ceilings)
+  const auto trunkOrGrown = [&](std::uint32_t key, const Eigen::Vector2d& seen_at) {
+    const std::size_t to = trunkOf(key, seen_at);
+    if (to != trunks.size()) return to;
+    const auto grown = grown_of_object.find(objectNear(seen_at));
+    return grown == grown_of_object.end() ? trunks.size() : grown->second;
+  };
+  // the column samples, by where they were taken
   std::vector<std::vector<Sample>> columns(trunks.size());
   std::vector<std::uint32_t> column_keys;
   for (const auto& [key, list] : columns_) column_keys.push_back(key);
   std::sort(column_keys.begin(), column_keys.end());
   for (std::uint32_t key : column_keys) {
     const std::vector<Sample>& list = columns_.at(key);
-    const Eigen::Vector2d seen_at = list.back().trunk.cast<double>();
-    std::size_t to = trunkOf(key, seen_at);
-    if (to == trunks.size()) {
-      const auto grown = grown_of_object.find(objectNear(seen_at));
-      if (grown == grown_of_object.end()) continue;
-      to = grown->second;
-    }
-    columns[to].insert(columns[to].end(), list.begin(), list.end());
+    const std::size_t to = trunkOrGrown(key, list.back().trunk.cast<double>());
+    if (to != trunks.size()) columns[to].insert(columns[to].end(), list.begin(), list.end());
   }
-  // the axis's ceilings go to the trunk of their key, else to the narrow trunk nearest where the
-  // trunk was last seen, within 1 m, else to a grown trunk that took samples there
+  // the axis's ceilings, by where the trunk was last seen
   std::vector<std::vector<float>> ceilings(trunks.size());
   std::vector<std::uint32_t> ceiling_keys;
   for (const auto& [key, list] : ceilings_) ceiling_keys.push_back(key);
@@ -512,13 +516,8 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   for (std::uint32_t key : ceiling_keys) {
     const auto record = records_.find(key);
     if (record == records_.end()) continue;
-    const Eigen::Vector2d seen_at = record->second.centre.cast<double>();
-    std::size_t to = trunkOf(key, seen_at);
-    if (to == trunks.size()) {
-      const auto grown = grown_of_object.find(objectNear(seen_at));
-      if (grown == grown_of_object.end()) continue;
-      to = grown->second;
-    }
+    const std::size_t to = trunkOrGrown(key, record->second.centre.cast<double>());
+    if (to == trunks.size()) continue;
     const std::vector<float>& list = ceilings_.at(key);
     ceilings[to].insert(ceilings[to].end(), list.begin(), list.end());
   }
