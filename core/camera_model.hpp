@@ -37,6 +37,23 @@ inline double heightAbove(const Point3& centre, const Vector3& dir, double x, do
   return centre.z() + lambda * dir.z();
 }
 
+// How far [m] from the vertical line through (x, y) the ray centre + lambda * dir (world frame,
+// lambda > 0) passes it: the horizontal distance from the line to where the ray meets the vertical
+// plane through it that faces the camera (its normal the horizontal direction from centre to (x, y)).
+// A run of pixels beside the line's image measures an object's width there; off the optical axis
+// the pinhole stretches it (by 1/cos of the angle off the axis: 1.27 at 38 degrees), and this undoes
+// that. NaN if the ray runs parallel to the plane or away from it.
+inline double acrossVertical(const Point3& centre, const Vector3& dir, double x, double y) {
+  Eigen::Vector2d n(x - centre.x(), y - centre.y());
+  const double range = n.norm();
+  if (!(range > 1e-9)) return std::numeric_limits<double>::quiet_NaN();
+  n /= range;
+  const double along = n.dot(dir.head<2>());
+  if (!(along > 1e-12)) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Vector2d meet = centre.head<2>() + (range / along) * dir.head<2>();
+  return (meet - Eigen::Vector2d(x, y)).norm();
+}
+
 // The images of the world's vertical lines. The top of an object straight above a vertex lies on
 // the image of the vertical through the vertex; with the camera pitched or rolled that is not the
 // vertex's image column but a line through the vanishing point of the vertical (a camera pitched up

@@ -198,6 +198,13 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   const auto rayAt = [&](std::size_t i, double row) {
     return Vector3(world_from_camera.linear() * pixelRay(k, Pixel(verticals.columnAt(views[i].px, row), row)));
   };
+  // [m] how far from the vertical of trunk i the edge of a run at image column `edge` (a pixel
+  // boundary) of `row` lies: where the ray through it passes the vertical (acrossVertical). Off the
+  // optical axis the pinhole stretches widths; pixels times depth / fx would widen such a crown
+  const auto across = [&](std::size_t i, int row, double edge) {
+    return acrossVertical(centre, world_from_camera.linear() * pixelRay(k, Pixel(edge, row + 0.5)),
+                          trunks[i].centre.x(), trunks[i].centre.y());
+  };
   // the axis's ceiling over trunk i in this image (CrownConfig::axis_ceiling): the height where the
   // lowest rising ray above the trunk's top crosses its vertical with the sky on both sides of it;
   // +inf if none does within the image
@@ -237,7 +244,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     const int gap = static_cast<int>(std::ceil(cfg.max_trunk_gap * k.fy / views[i].depth));
     std::optional<CrownOutcome> failed;
     bool cut = false;
-    int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, half = 0, own = 0;
+    int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, own = 0;
+    double half = 0;  // [m] the crown's half width at the trunk's vertical
     // the crown's lowest row over the bare trunk on the first walk, and the top row of the crown the
     // last walk went up (-1: it met none), for column samples
     int first_bottom = -1, column_top = -1;
@@ -304,11 +312,15 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
           joined_left = jumps_left, joined_right = jumps_right;
         }
         grew_left = out_left, grew_right = out_right;
+        // the run's ends (pixel edges) as distances from the vertical, the nearer one (or the end
+        // that still bounds it)
+        const double to_left = joined_left ? 0.0 : across(i, row, left);
+        const double to_right = joined_right ? 0.0 : across(i, row, right + 1);
         if (joined_left || joined_right) {
-          half = std::max(half, joined_left ? right - u : u - left);
+          half = std::max(half, joined_left ? to_right : to_left);
         } else {
           if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
-          half = std::max(half, std::min(u - left, right - u));
+          half = std::max(half, std::min(to_left, to_right));
         }
         prev_left = left, prev_right = right;
         ++bounded;
@@ -369,7 +381,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         const bool centred = apex_n > 0 && std::abs(apex / apex_n) <= cfg.max_offcentre * apex_width + 1.0;
         if (centred && std::isfinite(height) && std::isfinite(foot) && foot >= t.top + cfg.column_min_bare &&
             height > foot && standsAboveGround(t, groundAround(t, mesh, map), cfg.min_trunk_height)) {
-          double radius = half > 0 ? (half + 0.5) * views[i].depth / k.fx : 0.0;
+          double radius = half;
           if (cfg.max_width_to_depth > 0) radius = std::min(radius, 0.5 * cfg.max_width_to_depth * (height - foot));
           if (radius > cfg.max_radius) radius = 0;
           columns_[t.key].push_back({static_cast<float>(height), static_cast<float>(radius),
@@ -380,8 +392,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     }
     const Vector3 dir = rayAt(i, top + 0.5);
     const double height = heightAbove(centre, dir, t.centre.x(), t.centre.y());
-    double radius = (half + 0.5) * views[i].depth / k.fx;
-    if (!std::isfinite(height) || height <= t.top || radius > cfg.max_radius) {
+    double radius = half;
+    if (!std::isfinite(height) || height <= t.top || !(radius <= cfg.max_radius)) {
       count(CrownOutcome::Implausible);
       continue;
     }
