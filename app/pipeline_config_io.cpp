@@ -142,6 +142,7 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.flag("crown.column_tops", c.crown.column_tops);
   v.number("crown.column_radius_quantile", c.crown.column_radius_quantile, closed(0, 1));
   v.number("crown.column_min_bare", c.crown.column_min_bare, closed(0, 50, "m"));
+  v.flag("crown.grown_owners", c.crown.grown_owners);
   v.number("crown.ceiling_halfwidth", c.crown.ceiling_halfwidth, closed(0, 5, "m"));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);

@@ -171,13 +171,21 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   };
   const Verticals verticals(k, world_from_camera);
   const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, cfg.max_trunk_width);
-  std::vector<View> views(trunks.size());
   // with the foliage cue, only another tree can own a crown's pixel: a building behind or before the
   // crown is not foliage
   std::vector<char> trunk_like(objects.count, 0);
   for (const Trunk& t : trunks) trunk_like[t.object] = 1;
-  for (std::size_t i = 0; i < trunks.size(); ++i) {
-    const Point3 p = camera_from_world * Point3(trunks[i].centre.x(), trunks[i].centre.y(), trunks[i].top);
+  // after the trunks, with grown_owners, the trees whose crown's underside the lidar reached (wider
+  // than a trunk, no wider than max_grown_width): they are not measured, but one nearer the camera
+  // may own a run
+  std::vector<Trunk> standing = trunks;
+  if (cfg.grown_owners && foliage_cue) {
+    for (const Trunk& g : findTrunks(mesh, map, objects, cfg.max_grown_width))
+      if (!trunk_like[g.object]) standing.push_back(g);
+  }
+  std::vector<View> views(standing.size());
+  for (std::size_t i = 0; i < standing.size(); ++i) {
+    const Point3 p = camera_from_world * Point3(standing[i].centre.x(), standing[i].centre.y(), standing[i].top);
     const auto px = project(k, p);
     if (px && px->x() < rgb.cols && px->y() < rgb.rows)
       views[i] = {static_cast<int>(px->x()), static_cast<int>(px->y()), *px, p.z()};
@@ -339,13 +347,20 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         break;
       }
       // of the trunks standing under the run (their tops below the crown's), the one nearest its
-      // centre owns it
+      // centre owns it; a grown tree (grown_owners) nearer the camera also where it stands as near
+      // the centre (within 1.5 px): its trunk and crown then cover the column that was climbed
       std::optional<std::size_t> owner;
-      for (std::size_t j = 0; j < trunks.size() && !owner; ++j) {
+      for (std::size_t j = 0; j < standing.size() && !owner; ++j) {
         if (j == i || views[j].u < 0) continue;
+        // a grown tree owns a run only from farther than max_grown_width from the trunk: nearer, it
+        // may be a fragment of the trunk's own tree (its crown's underside)
+        const bool grown = j >= trunks.size();
+        if (grown &&
+            (views[j].depth >= views[i].depth || (standing[j].centre - t.centre).norm() <= cfg.max_grown_width))
+          continue;
         const int other = column(j, widest_row);
         if (other >= widest_left && other < widest_left + widest && views[j].v > top &&
-            std::abs(other - run_centre) < std::abs(own - run_centre))
+            std::abs(other - run_centre) < std::abs(own - run_centre) + (grown ? 1.5 : 0.0))
           owner = j;
       }
       if (!owner) {
