@@ -517,11 +517,12 @@ TEST(CrownCompletionTest, TheSkyOverTheTrunksAxisLowersWhatStandsAboveIt) {
   }
 }
 
-// A sampler that measured the tree's crown in three frames of its image.
-CrownSampler sampledThrice(const Tree& tree, const CrownConfig& cfg) {
+// A sampler that measured the tree's crown in three frames of its image (rgb; empty: tree.image()).
+CrownSampler sampledThrice(const Tree& tree, const CrownConfig& cfg, const cv::Mat& rgb = cv::Mat()) {
   CrownSampler sampler;
   for (int frame = 0; frame < 3; ++frame) {
-    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, tree.image(), tree.k, tree.pose, cfg, BoundaryEstimationConfig{}),
+    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb.empty() ? tree.image() : rgb, tree.k, tree.pose, cfg,
+                              BoundaryEstimationConfig{}),
               1);
   }
   return sampler;
@@ -637,12 +638,9 @@ TEST(CrownCompletionTest, ACrownSeenByATurnedAndPitchedCameraIsMeasuredAlongItsV
   const Pixel apex = *project(tree.k, tree.pose.inverse() * Point3(0.1, 20.1, 11.0));
   ASSERT_GT(trunk.x(), 540);
   ASSERT_GT(trunk.x() - apex.x(), 20);
-  CrownSampler sampler;
   CrownConfig cfg;
   cfg.min_baseline = 0;
-  for (int frame = 0; frame < 3; ++frame) {
-    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
-  }
+  CrownSampler sampler = sampledThrice(tree, cfg, rgb);
   EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
   // the crown's top in the image is its silhouette: the ray tangent to the sphere over its top,
   // which passes the trunk 11.34 m up (the sphere's apex is 11 m up, nearer the camera)
@@ -673,12 +671,9 @@ TEST(CrownCompletionTest, ACrownOffTheOpticalAxisIsNotWidenedByThePinhole) {
   tree.pose.linear().col(1) = Vector3(0, 0, -1);
   tree.pose.linear().col(2) = forward;
   const cv::Mat rgb = renderTree(tree);
-  CrownSampler sampler;
   CrownConfig cfg;
   cfg.min_baseline = 0;
-  for (int frame = 0; frame < 3; ++frame) {
-    EXPECT_EQ(sampler.measure(tree.mesh, tree.map, rgb, tree.k, tree.pose, cfg, BoundaryEstimationConfig{}), 1);
-  }
+  CrownSampler sampler = sampledThrice(tree, cfg, rgb);
   EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
   // raised out to 2.8 m from the trunk, not at 3.2 m (the nearer end of each run, on the side of the
   // optical axis, would give 3.24 m through depth / fx, and 2.96 m measured at the trunk)
