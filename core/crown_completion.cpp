@@ -38,6 +38,10 @@ bool standsAboveGround(const Trunk& t, double ground, double min_height) {
   return !std::isfinite(ground) || t.top - ground >= min_height;
 }
 
+bool fitsWithin(const Trunk& t, double width, double cell) {
+  return ((t.hi - t.lo).array() + 1).maxCoeff() * cell <= width;
+}
+
 std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects,
                               double max_width) {
   const auto& vertices = mesh.vertices();
@@ -170,19 +174,19 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     double depth = 0;  // [m] along the optical axis
   };
   const Verticals verticals(k, world_from_camera);
-  const std::vector<Trunk> trunks = findTrunks(mesh, map, objects, cfg.max_trunk_width);
+  // the trunks (the first `trunks`), then, with grown_owners, the trees whose crown's underside the lidar reached
+  // (wider than a trunk, no wider than max_grown_width): they are not measured, but one nearer the camera may own a run
+  const bool grown_owners = cfg.grown_owners && foliage_cue;
+  std::vector<Trunk> standing, wider;
+  for (const Trunk& t : findTrunks(
+           mesh, map, objects, grown_owners ? std::max(cfg.max_trunk_width, cfg.max_grown_width) : cfg.max_trunk_width))
+    (fitsWithin(t, cfg.max_trunk_width, map.voxelSize()) ? standing : wider).push_back(t);
+  const std::size_t trunks = standing.size();
+  standing.insert(standing.end(), wider.begin(), wider.end());
   // with the foliage cue, only another tree can own a crown's pixel: a building behind or before the
   // crown is not foliage
   std::vector<char> trunk_like(objects.count, 0);
-  for (const Trunk& t : trunks) trunk_like[t.object] = 1;
-  // after the trunks, with grown_owners, the trees whose crown's underside the lidar reached (wider
-  // than a trunk, no wider than max_grown_width): they are not measured, but one nearer the camera
-  // may own a run
-  std::vector<Trunk> standing = trunks;
-  if (cfg.grown_owners && foliage_cue) {
-    for (const Trunk& g : findTrunks(mesh, map, objects, cfg.max_grown_width))
-      if (!trunk_like[g.object]) standing.push_back(g);
-  }
+  for (std::size_t i = 0; i < trunks; ++i) trunk_like[standing[i].object] = 1;
   std::vector<View> views(standing.size());
   for (std::size_t i = 0; i < standing.size(); ++i) {
     const Point3 p = camera_from_world * Point3(standing[i].centre.x(), standing[i].centre.y(), standing[i].top);
@@ -211,13 +215,13 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
   // optical axis the pinhole stretches widths; pixels times depth / fx would widen such a crown
   const auto across = [&](std::size_t i, int row, double edge) {
     return acrossVertical(centre, world_from_camera.linear() * pixelRay(k, Pixel(edge, row + 0.5)),
-                          trunks[i].centre.x(), trunks[i].centre.y());
+                          standing[i].centre.x(), standing[i].centre.y());
   };
   // the axis's ceiling over trunk i in this image (CrownConfig::axis_ceiling): the height where the
   // lowest rising ray above the trunk's top crosses its vertical with the sky on both sides of it;
   // +inf if none does within the image
   const auto axisCeiling = [&](std::size_t i) {
-    const Trunk& t = trunks[i];
+    const Trunk& t = standing[i];
     const int half = static_cast<int>(std::ceil(cfg.ceiling_halfwidth * k.fx / views[i].depth));
     for (int row = views[i].v - 1; row >= 0; --row) {
       const int u = column(i, row);
@@ -234,8 +238,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     return std::numeric_limits<double>::infinity();
   };
   int measured = 0;
-  for (std::size_t i = 0; i < trunks.size(); ++i) {
-    const Trunk& t = trunks[i];
+  for (std::size_t i = 0; i < trunks; ++i) {
+    const Trunk& t = standing[i];
     const int v = views[i].v;
     if (views[i].u < 0) continue;
     CrownRecord& record = records_[t.key];
@@ -354,7 +358,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         if (j == i || views[j].u < 0) continue;
         // a grown tree owns a run only from farther than max_grown_width from the trunk: nearer, it
         // may be a fragment of the trunk's own tree (its crown's underside)
-        const bool grown = j >= trunks.size();
+        const bool grown = j >= trunks;
         if (grown &&
             (views[j].depth >= views[i].depth || (standing[j].centre - t.centre).norm() <= cfg.max_grown_width))
           continue;
@@ -452,7 +456,7 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
   std::vector<Trunk> trunks;
   std::unordered_map<std::int32_t, Trunk> wide;  // by object
   for (const Trunk& t : findTrunks(mesh, map, objects, 2 * cfg.max_radius)) {
-    if (((t.hi - t.lo).array() + 1).maxCoeff() * cell <= grown_width) {
+    if (fitsWithin(t, grown_width, cell)) {
       trunks.push_back(t);
     } else {
       wide.emplace(t.object, t);

@@ -230,6 +230,8 @@ inline bool raiseUnderCrown(MeshVertex& m, float h) {
 // The objects no wider than max_width [m] either way, in object order.
 std::vector<Trunk> findTrunks(const TerrainMesh& mesh, const VoxelMap& map, const MeshObjects& objects,
                               double max_width);
+// Is the trunk's object no wider than width [m] either way (cells of `cell` m)?
+bool fitsWithin(const Trunk& t, double width, double cell);
 // The height [m] of the lowest ground vertex within 1 m of the trunk; +inf if there is none.
 double groundAround(const Trunk& t, const TerrainMesh& mesh, const VoxelMap& map);
 // Does the trunk stand at least min_height above the ground around it (groundAround)? (Yes when
