@@ -143,6 +143,9 @@ void forEachSetting(PipelineConfig& c, Visit&& v) {
   v.number("crown.column_radius_quantile", c.crown.column_radius_quantile, closed(0, 1));
   v.number("crown.column_min_bare", c.crown.column_min_bare, closed(0, 50, "m"));
   v.flag("crown.grown_owners", c.crown.grown_owners);
+  v.flag("crown.cap_bounds_trunk", c.crown.cap_bounds_trunk);
+  v.flag("crown.ellipse_radius", c.crown.ellipse_radius);
+  v.number("crown.ellipse_min_depth", c.crown.ellipse_min_depth, closed(0.01, 1));
   v.number("crown.ceiling_halfwidth", c.crown.ceiling_halfwidth, closed(0, 5, "m"));
   // the crowns' visual hull
   v.flag("hull.enabled", c.hull.enabled);

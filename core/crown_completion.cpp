@@ -257,7 +257,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     std::optional<CrownOutcome> failed;
     bool cut = false;
     int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, own = 0;
-    double half = 0;  // [m] the crown's half width at the trunk's vertical
+    double half = 0;                              // [m] the crown's half width at the trunk's vertical
+    std::vector<std::pair<int, double>> profile;  // (row, half width there [m]) of the runs kept
     // the crown's lowest row over the bare trunk on the first walk, and the top row of the crown the
     // last walk went up (-1: it met none), for column samples
     int first_bottom = -1, column_top = -1;
@@ -295,6 +296,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
       // first one bounded on both sides. With one_sided, a jump at one end only stops the widest
       // run there, and the other end goes on (CrownConfig::one_sided)
       widest = 0, widest_left = 0, widest_row = top, half = 0;
+      profile.clear();
       int prev_left = column(i, top), prev_right = prev_left, bounded = 0;
       // how far each end moved out at the row before: a crown's outline widens less and less down
       // to its widest row (steeply near its top), so only an end that moves out by more than `jump`
@@ -330,9 +332,11 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
         const double to_right = joined_right ? 0.0 : across(i, row, right + 1);
         if (joined_left || joined_right) {
           half = std::max(half, joined_left ? to_right : to_left);
+          profile.emplace_back(row, joined_left ? to_right : to_left);
         } else {
           if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
           half = std::max(half, std::min(to_left, to_right));
+          profile.emplace_back(row, std::min(to_left, to_right));
         }
         prev_left = left, prev_right = right;
         ++bounded;
@@ -420,6 +424,20 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     // pixel on the vertical): wider, the runs took in crowns behind it on both sides. A crown cut
     // off by the image top is deeper than it shows: no bound
     const double lowest = heightAbove(centre, rayAt(i, bottom + 1.0), t.centre.x(), t.centre.y());
+    if (cfg.ellipse_radius && !cut && std::isfinite(lowest) && height > lowest) {
+      const double b = 0.5 * (height - lowest);
+      std::vector<double> fits;
+      for (const auto& [row, w] : profile) {
+        const double h = heightAbove(centre, rayAt(i, row + 0.5), t.centre.x(), t.centre.y());
+        const double q = (height - h) / b;
+        if (std::isfinite(h) && q >= cfg.ellipse_min_depth && q <= 2 - cfg.ellipse_min_depth)
+          fits.push_back(w / std::sqrt(1 - (1 - q) * (1 - q)));
+      }
+      if (!fits.empty()) {
+        std::nth_element(fits.begin(), fits.begin() + fits.size() / 2, fits.end());
+        radius = std::min(cfg.max_radius, std::max(radius, fits[fits.size() / 2]));
+      }
+    }
     if (!cut && std::isfinite(lowest) && cfg.max_width_to_depth > 0)
       radius = std::min(radius, 0.5 * cfg.max_width_to_depth * std::max(0.0, height - lowest));
     // the clear line reaches past a trunk farther than max_distance, to the far side of its crown
@@ -443,7 +461,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
 }
 
 int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfig& cfg, const SkyThrough& sky_through) {
-  lowered_ = 0;
+  lowered_ = 0, lowered_by_cap_ = 0;
   if (!cfg.enabled || (samples_.empty() && columns_.empty() && ceilings_.empty()) || mesh.vertices().empty()) return 0;
   const MeshObjects objects = findMeshObjects(mesh, map);
   auto& vertices = mesh.vertices();
@@ -717,11 +735,18 @@ int CrownSampler::apply(TerrainMesh& mesh, const VoxelMap& map, const CrownConfi
         const std::int64_t j = mesh.find(c0 + CellIndex(dx, dy));
         if (j < 0 || (objects.of[j] >= 0 && objects.of[j] != t.object)) continue;
         MeshVertex& m = vertices[j];
-        if (m.estimated()) continue;  // its own estimates stand
         const Eigen::Vector2d p((m.cell.x() + 0.5) * cell, (m.cell.y() + 0.5) * cell);
         const double d2 = (p - t.centre).squaredNorm();
         if (d2 > r * r) continue;
         const double cap = top - r + std::sqrt(r * r - d2);
+        if (m.estimated()) {
+          if (cfg.cap_bounds_trunk && outcome == CrownVerdict::Raised && objects.of[j] == t.object &&
+              m.recovered_height > cap) {
+            m.recovered_height = std::max(m.sensed_height, static_cast<float>(cap));
+            ++lowered_by_cap_;
+          }
+          continue;  // its own estimates stand
+        }
         if (cfg.sky_guard && sky_through && sky_through(p.x(), p.y(), top - r, cap)) continue;
         raised += raiseUnderCrown(m, static_cast<float>(cap));
       }

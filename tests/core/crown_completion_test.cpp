@@ -468,6 +468,8 @@ TEST(CrownCompletionTest, RadiiThatAgreeFromApartGiveTheirMedian) {
     cfg.radius_quantile = 0.25;
     cfg.radius_agreement = c.agreement;
     cfg.agreement_bearings = c.bearings;
+    // the screened runs' radii as measured: an ellipse through them would widen them towards 3 m
+    cfg.ellipse_radius = false;
     CrownSampler sampler;
     const cv::Mat whole = tree.image(), cut = screenedEastOf(tree, 2.6);
     for (const bool hidden : {true, false, false, true, false, true, false, false})
@@ -921,6 +923,80 @@ TEST(CrownCompletionTest, TheSkyGuardLeavesAloneTheCapsVerticesTheSkyShowedThrou
       // asked from the cap's base (its top less its radius, 8 m) up to the cap
       EXPECT_NEAR(lowest, 8.0, 0.15);
       EXPECT_NEAR(highest, 11.0, 0.15);
+    }
+  }
+}
+
+// The trunk's own estimate (40 m: the top edge of a taller crown behind it, which the clear line
+// does not know) stands above the cap its crown's samples give (11 m): with crown.cap_bounds_trunk
+// the trunk is lowered to the cap, without it the estimate stands.
+TEST(CrownCompletionTest, TheCapOfTheTrunksOwnCrownBoundsItsEstimates) {
+  for (const bool bound : {false, true}) {
+    Tree tree;
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.cap_bounds_trunk = bound;
+    cfg.axis_ceiling = false;  // the sky over the crown would lower the trunk to it as well
+    MeshVertex& trunk = tree.mesh.vertices()[tree.mesh.find(CellIndex(0, 100))];
+    trunk.estimates = {{40.0f, 20.0f, 1.6f}};
+    trunk.recovered_height = 40.0f;
+    CrownSampler sampler = sampledThrice(tree, cfg);
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    if (bound) {
+      EXPECT_NEAR(tree.at(0, 100).height(), 11.0, 0.15);
+      EXPECT_EQ(sampler.loweredByCap(), 1);
+    } else {
+      EXPECT_FLOAT_EQ(tree.at(0, 100).height(), 40.0f);
+      EXPECT_EQ(sampler.loweredByCap(), 0);
+    }
+    tree.expectCap();
+  }
+}
+
+// A tall crown (an ellipsoid 2 m in radius and 4 m in half height, topped at 13 m) whose runs a
+// wider crown behind it joins on both sides from 1.5 m below its top: the walk ends there, where the
+// crown is 1.56 m wide (2 sqrt(1 - 0.375^2)). With crown.ellipse_radius the runs kept, on the crown's
+// depth from its top to its lowest pixel on the vertical (5 m), give its radius (2 m); without it the
+// cap is 1.56 m wide and the ground 1.8 m from the trunk stays ground.
+TEST(CrownCompletionTest, AnEllipseThroughTheRunsKeptGivesTheRadiusOfACrownJoinedAboveItsWidest) {
+  for (const bool ellipse : {false, true}) {
+    Tree tree;
+    cv::Mat rgb(tree.k.height, tree.k.width, CV_8UC3, cv::Scalar(120, 170, 235));
+    const int horizon = static_cast<int>(tree.k.cy);
+    cv::rectangle(rgb, cv::Rect(0, horizon, tree.k.width, tree.k.height - horizon), cv::Scalar(90, 110, 60),
+                  cv::FILLED);
+    const auto base = project(tree.k, tree.pose.inverse() * Point3(0.1, 20.1, 0.0));
+    ASSERT_TRUE(base);
+    const double u = base->x(), depth = 20.0;
+    // row by row, the height on the trunk's vertical plane and the silhouettes' half widths there
+    for (int row = 0; row < horizon; ++row) {
+      const double h = 1.6 + depth * (tree.k.cy - (row + 0.5)) / tree.k.fy;
+      double w = 0;
+      if (std::abs(h - 9.0) < 4.0) w = 2.0 * std::sqrt(1 - (h - 9.0) * (h - 9.0) / 16.0);
+      if (h > 6.0 && h < 11.5) w = 4.0;  // the crown behind
+      if (h < 5.0) w = 0.1;              // the bare trunk
+      const int half_px = static_cast<int>(std::lround(tree.k.fx * w / depth));
+      if (w == 0) continue;
+      cv::line(rgb, cv::Point(static_cast<int>(std::lround(u)) - half_px, row),
+               cv::Point(static_cast<int>(std::lround(u)) + half_px, row),
+               h < 5.0 ? cv::Scalar(90, 60, 30) : cv::Scalar(40, 110, 30));
+    }
+    CrownConfig cfg;
+    cfg.min_baseline = 0;  // the same image stands for views along a baseline here
+    cfg.ellipse_radius = ellipse;
+    CrownSampler sampler = sampledThrice(tree, cfg, rgb);
+    EXPECT_GT(sampler.apply(tree.mesh, tree.map, cfg), 0);
+    EXPECT_EQ(sampler.records()[0].verdict, CrownVerdict::Raised);
+    EXPECT_NEAR(tree.at(1, 100).height(), 13.0, 0.15);
+    if (ellipse) {
+      // 1.8 m east of the trunk: 13 - 2 + sqrt(4 - 3.24)
+      EXPECT_NEAR(tree.at(9, 100).height(), 11.0 + std::sqrt(0.76), 0.3);
+      EXPECT_FALSE(tree.at(12, 100).raised());
+    } else {
+      // 1.2 m east: 13 - 1.56 + sqrt(1.56^2 - 1.44)
+      EXPECT_NEAR(tree.at(6, 100).height(), 13.0 - 1.56 + std::sqrt(1.56 * 1.56 - 1.44), 0.3);
+      EXPECT_FALSE(tree.at(9, 100).raised());
     }
   }
 }
