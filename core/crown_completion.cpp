@@ -238,6 +238,8 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     return std::numeric_limits<double>::infinity();
   };
   int measured = 0;
+  std::vector<std::pair<int, double>> profile;  // (row, half width there [m]) of the runs kept
+  std::vector<double> fits;                     // [m] the radii of the ellipses through them
   for (std::size_t i = 0; i < trunks; ++i) {
     const Trunk& t = standing[i];
     const int v = views[i].v;
@@ -257,8 +259,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     std::optional<CrownOutcome> failed;
     bool cut = false;
     int top = v, bottom = v - 1, widest = 0, widest_left = 0, widest_row = v, own = 0;
-    double half = 0;                              // [m] the crown's half width at the trunk's vertical
-    std::vector<std::pair<int, double>> profile;  // (row, half width there [m]) of the runs kept
+    double half = 0;  // [m] the crown's half width at the trunk's vertical
     // the crown's lowest row over the bare trunk on the first walk, and the top row of the crown the
     // last walk went up (-1: it met none), for column samples
     int first_bottom = -1, column_top = -1;
@@ -426,7 +427,7 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
     const double lowest = heightAbove(centre, rayAt(i, bottom + 1.0), t.centre.x(), t.centre.y());
     if (cfg.ellipse_radius && !cut && std::isfinite(lowest) && height > lowest) {
       const double b = 0.5 * (height - lowest);
-      std::vector<double> fits;
+      fits.clear();
       for (const auto& [row, w] : profile) {
         const double h = heightAbove(centre, rayAt(i, row + 0.5), t.centre.x(), t.centre.y());
         const double q = (height - h) / b;

@@ -976,8 +976,8 @@ TEST(CrownCompletionTest, AnEllipseThroughTheRunsKeptGivesTheRadiusOfACrownJoine
       if (std::abs(h - 9.0) < 4.0) w = 2.0 * std::sqrt(1 - (h - 9.0) * (h - 9.0) / 16.0);
       if (h > 6.0 && h < 11.5) w = 4.0;  // the crown behind
       if (h < 5.0) w = 0.1;              // the bare trunk
-      const int half_px = static_cast<int>(std::lround(tree.k.fx * w / depth));
       if (w == 0) continue;
+      const int half_px = static_cast<int>(std::lround(tree.k.fx * w / depth));
       cv::line(rgb, cv::Point(static_cast<int>(std::lround(u)) - half_px, row),
                cv::Point(static_cast<int>(std::lround(u)) + half_px, row),
                h < 5.0 ? cv::Scalar(90, 60, 30) : cv::Scalar(40, 110, 30));
