@@ -327,18 +327,15 @@ int CrownSampler::measure(const TerrainMesh& mesh, const VoxelMap& map, const cv
           joined_left = jumps_left, joined_right = jumps_right;
         }
         grew_left = out_left, grew_right = out_right;
-        // the run's ends (pixel edges) as distances from the vertical, the nearer one (or the end
-        // that still bounds it)
-        const double to_left = joined_left ? 0.0 : across(i, row, left);
-        const double to_right = joined_right ? 0.0 : across(i, row, right + 1);
-        if (joined_left || joined_right) {
-          half = std::max(half, joined_left ? to_right : to_left);
-          profile.emplace_back(row, joined_left ? to_right : to_left);
-        } else {
-          if (right - left + 1 > widest) widest = right - left + 1, widest_left = left, widest_row = row;
-          half = std::max(half, std::min(to_left, to_right));
-          profile.emplace_back(row, std::min(to_left, to_right));
-        }
+        // the crown's half width at this row: the distance from the vertical to the run's nearer end
+        // (a pixel edge), or to the end that still bounds it
+        const double w = joined_left    ? across(i, row, right + 1)
+                         : joined_right ? across(i, row, left)
+                                        : std::min(across(i, row, left), across(i, row, right + 1));
+        if (!joined_left && !joined_right && right - left + 1 > widest)
+          widest = right - left + 1, widest_left = left, widest_row = row;
+        half = std::max(half, w);
+        profile.emplace_back(row, w);
         prev_left = left, prev_right = right;
         ++bounded;
       }
