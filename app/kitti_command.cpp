@@ -45,12 +45,13 @@ class KittiCommand : public Command {
     if (!cloud_.empty()) cloud.emplace(cloud_, force_);
     std::cout << std::fixed << std::setprecision(3)
               << "scan          method                 F1     IoU    precision recall\n";
+    eval::KittiScorer scorer(config_.voxel_map, config_.ground, sensor_height_);
     for (const auto& scan_path : scans_) {
       const rig::KittiScan scan = rig::readKittiScan(scan_path);
       fs::path label_path = scan_path;
       label_path.replace_extension(".label");
       const auto labels = rig::readSemanticKittiLabels(label_path, scan.points.size());
-      const auto j = eval::scoreKittiScan(scan.points, labels, config_.voxel_map, config_.ground, sensor_height_);
+      const auto j = scorer.score(scan.points, labels);
       const auto row = [&](const std::string& method, const nlohmann::json& scores) {
         std::cout << std::left << std::setw(14) << scan_path.stem().string() << std::setw(22) << method << std::right
                   << scores["f1"].get<double>() << "  " << scores["iou"].get<double>() << "  "
@@ -86,9 +87,8 @@ class KittiCommand : public Command {
       std::cout << "\n";
       all[scan_path.stem().string()] = j;
       if (cloud) {
-        const auto ground = eval::segmentScan(scan.points, config_.voxel_map, config_.ground);
         io::writeFileAtomic(cloud->path() / (scan_path.stem().string() + ".ply"),
-                            eval::kittiVerdictPly(scan.points, labels, ground), false);
+                            eval::kittiVerdictPly(scan.points, labels, scorer.groundOfLastScan()), false);
       }
     }
     if (!json_.empty()) io::writeFileAtomic(json_, all.dump(1) + "\n", force_);

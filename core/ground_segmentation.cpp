@@ -336,6 +336,35 @@ SegmentationResult segmentGroundLabels(const VoxelMap& map, const GroundSegmenta
   return out;
 }
 
+struct ScanSegmenter::State {
+  GroundSegmentationConfig config;
+  VoxelMap map;
+  std::vector<std::uint32_t> voxel_of;
+  Workspace work;
+  SegmentationResult result;
+  PointLabelBuffers buffers;
+  std::vector<std::uint8_t> labels;
+  State(const VoxelMapConfig& voxels, const GroundSegmentationConfig& c) : config(c), map(voxels) {}
+};
+
+ScanSegmenter::ScanSegmenter(const VoxelMapConfig& voxels, const GroundSegmentationConfig& config)
+    : state_(std::make_unique<State>(voxels, config)) {}
+ScanSegmenter::~ScanSegmenter() = default;
+
+const std::vector<std::uint8_t>& ScanSegmenter::segment(const std::vector<Point3>& points) {
+  State& s = *state_;
+  s.map.clear();
+  s.map.insert(points, 0, nullptr, &s.voxel_of);
+  segmentWhole(s.map, s.config, s.work, s.result);
+  labelScanPoints(s.map, points, s.voxel_of, s.result.refined, s.config, s.buffers, s.labels);
+  return s.labels;
+}
+
+const VoxelMap& ScanSegmenter::map() const { return state_->map; }
+const std::vector<std::uint32_t>& ScanSegmenter::voxelOf() const { return state_->voxel_of; }
+const SegmentationResult& ScanSegmenter::result() const { return state_->result; }
+const GroundSegmentationConfig& ScanSegmenter::config() const { return state_->config; }
+
 // ---------------------------------------------------------------------------------------------
 // incremental
 

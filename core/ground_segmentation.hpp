@@ -252,10 +252,46 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
                                           const std::vector<std::uint32_t>& voxel_of,
                                           const std::vector<std::uint8_t>& voxel_ground,
                                           const GroundSegmentationConfig& config);
+// What labelScanPoints works in: a scan's column grid and per-voxel levels, kept by a caller that
+// labels scan after scan so that their memory is reused.
+struct PointLabelBuffers {
+  std::vector<float> columns, level, ceiling;
+};
+// The same into out (resized to the points), working in buffers.
+void labelScanPoints(const VoxelMap& map, const std::vector<Point3>& points, const std::vector<std::uint32_t>& voxel_of,
+                     const std::vector<std::uint8_t>& voxel_ground, const GroundSegmentationConfig& config,
+                     PointLabelBuffers& buffers, std::vector<std::uint8_t>& out);
 // Columns of the grid labelScanPoints lays over a map (its extent and a margin of one column); 0
 // for an empty map. A scan 120 m in reach with 0.2 m voxels: 1.44 M.
 std::int64_t scanColumnCount(const VoxelMap& map);
 constexpr std::int64_t kMaxScanColumns = std::int64_t{1} << 26;
+
+// Segments single scans one after another, as a robot's sweeps or a dataset's scans come: each scan
+// becomes a voxel map of its own, whose voxels are segmented (segmentGroundLabels) and whose points
+// take their voxels' labels (labelScanPoints). The map, the segmentation's workspace and the
+// labels' buffers are kept from one scan to the next, so that a scan costs no fresh memory: on a
+// 2-core machine a KITTI scan's pages alone took longer than its segmentation. The labels are
+// those of a segmenter made for each scan.
+class ScanSegmenter {
+ public:
+  ScanSegmenter(const VoxelMapConfig& voxels, const GroundSegmentationConfig& config);
+  ~ScanSegmenter();
+  ScanSegmenter(const ScanSegmenter&) = delete;
+  ScanSegmenter& operator=(const ScanSegmenter&) = delete;
+
+  // Per point: 1 ground (valid until the next call). The scan replaces the last one.
+  const std::vector<std::uint8_t>& segment(const std::vector<Point3>& points);
+  // Of the last scan: its map, each point's voxel (kNoVoxel for a point left out) and the voxels'
+  // segmentation.
+  const VoxelMap& map() const;
+  const std::vector<std::uint32_t>& voxelOf() const;
+  const SegmentationResult& result() const;
+  const GroundSegmentationConfig& config() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 // Segments every voxel of the map and writes the refined labels into the voxels.
 SegmentationResult segmentGround(VoxelMap& map, const GroundSegmentationConfig& config);

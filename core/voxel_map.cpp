@@ -146,6 +146,13 @@ std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t fr
   return voxels_.size() - before;
 }
 
+void VoxelMap::clear() {
+  voxels_.clear();
+  new_voxels_.clear();
+  std::fill(slots_.begin(), slots_.end(), kEmpty);
+  lowest_ = highest_ = VoxelIndex::Zero();
+}
+
 std::vector<std::uint32_t> VoxelMap::takeNewVoxels() {
   std::vector<std::uint32_t> out;
   out.swap(new_voxels_);

@@ -63,6 +63,9 @@ class VoxelMap {
   // the map empty, if two voxels share an index or one lies beyond the +-1 M voxels insert keeps.
   bool restore(std::vector<Voxel> voxels);
 
+  // Empties the map, keeping its memory for the voxels to come.
+  void clear();
+
   // Bytes used by the map's own storage.
   std::size_t memoryBytes() const;
 

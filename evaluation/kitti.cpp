@@ -16,39 +16,31 @@ using nlohmann::json;
 
 namespace {
 
-// One scan segmented once: per point the GMRF's labels after the per-point step, the same voxel
-// labels without it and the histogram's rough classes, and the time the first took [ms].
+// One scan segmented once by a segmenter: per point the GMRF's labels after the per-point step, the
+// same voxel labels without it and the histogram's rough classes, and the time the first took [ms].
 struct ScanLabels {
   std::vector<std::uint8_t> points, voxels, rough;
   double milliseconds = 0;
 };
-ScanLabels labelScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
-                     const GroundSegmentationConfig& ground, bool voxel_labels_too) {
+ScanLabels labelScan(ScanSegmenter& segmenter, const std::vector<Point3>& points) {
   ScanLabels out;
   const auto t0 = std::chrono::steady_clock::now();
-  VoxelMap map(voxels);
-  std::vector<std::uint32_t> voxel_of;
-  map.insert(points, 0, nullptr, &voxel_of);
-  const SegmentationResult result = segmentGroundLabels(map, ground);
-  out.points = labelScanPoints(map, points, voxel_of, result.refined, ground);
+  out.points = segmenter.segment(points);
   out.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (voxel_labels_too) {
-    GroundSegmentationConfig as_voxels = ground;
-    as_voxels.point_rise = 0;
-    out.voxels = labelScanPoints(map, points, voxel_of, result.refined, as_voxels);
-    out.rough = labelScanPoints(map, points, voxel_of, result.rough, as_voxels);
-  }
+  GroundSegmentationConfig as_voxels = segmenter.config();
+  as_voxels.point_rise = 0;
+  const auto& map = segmenter.map();
+  out.voxels = labelScanPoints(map, points, segmenter.voxelOf(), segmenter.result().refined, as_voxels);
+  out.rough = labelScanPoints(map, points, segmenter.voxelOf(), segmenter.result().rough, as_voxels);
   return out;
 }
 
-}  // namespace
-
-std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
-                                      const GroundSegmentationConfig& ground, double* milliseconds) {
-  ScanLabels labels = labelScan(points, voxels, ground, false);
-  if (milliseconds) *milliseconds = labels.milliseconds;
-  return std::move(labels.points);
+GroundSegmentationConfig withSolver(GroundSegmentationConfig config, GroundSegmentationConfig::Solver solver) {
+  config.solver = solver;
+  return config;
 }
+
+}  // namespace
 
 json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                     const std::vector<std::uint8_t>& ground) {
@@ -109,8 +101,13 @@ std::string kittiVerdictPly(const std::vector<Point3>& points, const std::vector
   return out;
 }
 
-json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
-                    const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground, double sensor_height) {
+KittiScorer::KittiScorer(const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground, double sensor_height)
+    : ground_(ground),
+      sensor_height_(sensor_height),
+      icm_(voxels, withSolver(ground, GroundSegmentationConfig::Solver::Icm)),
+      mincut_(voxels, withSolver(ground, GroundSegmentationConfig::Solver::MinCut)) {}
+
+json KittiScorer::score(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels) {
   std::vector<bool> truth(points.size()), skip(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     truth[i] = rig::isKittiGround(labels[i]);
@@ -125,22 +122,20 @@ json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::ui
   // each solver once: its labels per point, its voxel labels before the per-point step (the GMRF's
   // own share) and, of the configured one, where it errs and the histogram's rough classes (they do
   // not depend on the solver)
-  GroundSegmentationConfig g = ground;
-  g.solver = GroundSegmentationConfig::Solver::Icm;
-  const ScanLabels icm = labelScan(points, voxels, g, true);
-  g.solver = GroundSegmentationConfig::Solver::MinCut;
-  const ScanLabels cut = labelScan(points, voxels, g, true);
+  const ScanLabels icm = labelScan(icm_, points);
+  const ScanLabels cut = labelScan(mincut_, points);
   for (const auto& [name, s] : {std::pair<const char*, const ScanLabels*>{"gmrf_icm", &icm}, {"gmrf_mincut", &cut}}) {
     j[name] = score(s->points);
     j[name]["time_ms"] = s->milliseconds;
     j["voxel_labels"][name] = score(s->voxels);
   }
-  const bool by_icm = ground.solver == GroundSegmentationConfig::Solver::Icm;
+  const bool by_icm = ground_.solver == GroundSegmentationConfig::Solver::Icm;
   const ScanLabels& configured = by_icm ? icm : cut;
+  ground_of_last_ = configured.points;
   j["confusion"] = kittiConfusion(points, labels, configured.points);
   j["confusion"]["method"] = by_icm ? "gmrf_icm" : "gmrf_mincut";
   j["histogram"] = score(configured.rough);
-  j["fixed_band"] = score(groundByFixedBand(points, {Point3(0, 0, -sensor_height)}, ground.delta));
+  j["fixed_band"] = score(groundByFixedBand(points, {Point3(0, 0, -sensor_height_)}, ground_.delta));
   j["ransac_plane"] = score(groundByRansacPlane(points, 0.2));
   j["morphological_filter"] = score(groundByMorphologicalFilter(points, MorphologicalFilterConfig{}));
   return j;

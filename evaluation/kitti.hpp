@@ -21,23 +21,30 @@ namespace terrain::eval {
 nlohmann::json kittiConfusion(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                               const std::vector<std::uint8_t>& ground);
 
-// sensor_height: the lidar's height above the road [m] (KITTI: 1.73), for the fixed band. The
-// report holds every method's scores (kGroundMethods; the GMRF's with labelScanPoints' per-point
-// step), the GMRF's voxel labels without that step under "voxel_labels", and, for the configured
-// solver, the confusion (kittiConfusion) under "confusion".
-nlohmann::json scoreKittiScan(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
-                              const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground,
-                              double sensor_height);
+// Scores scan after scan against their labels, each solver's segmenter (ScanSegmenter) kept from one
+// scan to the next. sensor_height: the lidar's height above the road [m] (KITTI: 1.73), for the
+// fixed band. A scan's report holds every method's scores (kGroundMethods; the GMRF's with
+// labelScanPoints' per-point step, and the time its segmentation took), the GMRF's voxel labels
+// without that step under "voxel_labels", and, for the configured solver, the confusion
+// (kittiConfusion) under "confusion".
+class KittiScorer {
+ public:
+  KittiScorer(const VoxelMapConfig& voxels, const GroundSegmentationConfig& ground, double sensor_height);
+  nlohmann::json score(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels);
+  // the configured solver's per-point labels of the last scan scored (1 ground)
+  const std::vector<std::uint8_t>& groundOfLastScan() const { return ground_of_last_; }
+
+ private:
+  GroundSegmentationConfig ground_;
+  double sensor_height_;
+  ScanSegmenter icm_, mincut_;
+  std::vector<std::uint8_t> ground_of_last_;
+};
 
 // One scan as a binary little-endian PLY for a point-cloud viewer: per point x y z (float), the
 // class (ushort, readSemanticKittiLabels' learning order), the ground label (uchar) and the verdict
 // (uchar: 0 non-ground right, 1 ground right, 2 false ground, 3 missed ground, 4 unscored).
 std::string kittiVerdictPly(const std::vector<Point3>& points, const std::vector<std::uint16_t>& labels,
                             const std::vector<std::uint8_t>& ground);
-
-// Per-point ground labels of the paper's method on one scan (the GMRF's voxel labels refined per
-// point by labelScanPoints), and the time it took [ms].
-std::vector<std::uint8_t> segmentScan(const std::vector<Point3>& points, const VoxelMapConfig& voxels,
-                                      const GroundSegmentationConfig& ground, double* milliseconds = nullptr);
 
 }  // namespace terrain::eval

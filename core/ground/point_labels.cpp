@@ -17,15 +17,18 @@ namespace terrain {
 
 namespace {
 
-// A dense grid of columns over the map's horizontal extent, one float per column.
+// A dense grid of columns over the map's horizontal extent, one float per column, in storage that
+// outlives it (its memory reused from one scan to the next).
 class ColumnGrid {
  public:
-  ColumnGrid(const VoxelMap& map, float fill)
+  ColumnGrid(const VoxelMap& map, float fill, std::vector<float>& storage)
       : x0_(map.lowestIndex().x() - 1),
         y0_(map.lowestIndex().y() - 1),
         nx_(std::int64_t(map.highestIndex().x()) - x0_ + 2),
         ny_(std::int64_t(map.highestIndex().y()) - y0_ + 2),
-        cells_(std::size_t(nx_ * ny_), fill) {}
+        cells_(storage) {
+    cells_.assign(std::size_t(nx_ * ny_), fill);
+  }
   // [0, size()) for a voxel index's column (with a margin of one column each way inside the grid)
   std::size_t at(const VoxelIndex& v) const { return std::size_t((v.y() - y0_) * nx_ + (v.x() - x0_)); }
   std::int64_t stride() const { return nx_; }
@@ -34,7 +37,7 @@ class ColumnGrid {
 
  private:
   std::int64_t x0_, y0_, nx_, ny_;
-  std::vector<float> cells_;
+  std::vector<float>& cells_;
 };
 
 // sorts nine values in place by a 25-comparator network (branch-free: min and max)
@@ -60,18 +63,27 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
                                           const std::vector<std::uint32_t>& voxel_of,
                                           const std::vector<std::uint8_t>& voxel_ground,
                                           const GroundSegmentationConfig& config) {
-  std::vector<std::uint8_t> out(points.size(), 0);
+  PointLabelBuffers buffers;
+  std::vector<std::uint8_t> out;
+  labelScanPoints(map, points, voxel_of, voxel_ground, config, buffers, out);
+  return out;
+}
+
+void labelScanPoints(const VoxelMap& map, const std::vector<Point3>& points, const std::vector<std::uint32_t>& voxel_of,
+                     const std::vector<std::uint8_t>& voxel_ground, const GroundSegmentationConfig& config,
+                     PointLabelBuffers& buffers, std::vector<std::uint8_t>& out) {
+  out.assign(points.size(), 0);
   const auto& voxels = map.voxels();
   // each point takes its voxel's label (0 for a point in none)
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 8192), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i)
       if (voxel_of[i] != VoxelMap::kNoVoxel) out[i] = voxel_ground[voxel_of[i]];
   });
-  if (config.point_rise <= 0 || map.size() == 0 || scanColumnCount(map) > kMaxScanColumns) return out;
+  if (config.point_rise <= 0 || map.size() == 0 || scanColumnCount(map) > kMaxScanColumns) return;
 
   // the lowest point of each column among those its ground voxels hold
   constexpr float kNone = std::numeric_limits<float>::infinity();
-  ColumnGrid lowest(map, kNone);
+  ColumnGrid lowest(map, kNone, buffers.columns);
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!out[i]) continue;
     float& low = lowest[lowest.at(voxels[voxel_of[i]].index)];
@@ -84,7 +96,10 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
   // the mean lowest of the columns on either side along x and along y (where both sides hold ground)
   const std::int64_t stride = lowest.stride();
   const float rise = static_cast<float>(config.point_rise), reach = static_cast<float>(config.point_reach);
-  std::vector<float> level(voxels.size(), kNone), ceiling(voxels.size(), kNone);
+  std::vector<float>& level = buffers.level;
+  std::vector<float>& ceiling = buffers.ceiling;
+  level.assign(voxels.size(), kNone);
+  ceiling.assign(voxels.size(), kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4096), [&](const auto& r) {
     for (std::size_t v = r.begin(); v != r.end(); ++v) {
       const std::int64_t c = std::int64_t(lowest.at(voxels[v].index));
@@ -125,7 +140,6 @@ std::vector<std::uint8_t> labelScanPoints(const VoxelMap& map, const std::vector
       out[i] = out[i] ? z <= ceiling[voxel_of[i]] : std::abs(z - m) <= reach;
     }
   });
-  return out;
 }
 
 }  // namespace terrain

@@ -314,26 +314,60 @@ void BM_CameraRig(benchmark::State& state) {
 }
 BENCHMARK(BM_CameraRig)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// one real scan segmented as 'terrain kitti' does, by ICM (0) or min-cut (1)
-void BM_KittiScanSegmentation(benchmark::State& state) {
-  static const rig::KittiScan scan =
-      rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
+// the two real scans of tests/data, for the segmentation benchmarks
+const std::vector<std::vector<Point3>>& kittiScans() {
+  static const std::vector<std::vector<Point3>> scans = [] {
+    std::vector<std::vector<Point3>> out;
+    for (const char* name : {"000000", "000020"})
+      out.push_back(
+          rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/" + name + ".bin").points);
+    return out;
+  }();
+  return scans;
+}
+
+GroundSegmentationConfig kittiSolver(std::int64_t arg) {
   GroundSegmentationConfig cfg;
-  cfg.solver = state.range(0) == 0 ? GroundSegmentationConfig::Solver::Icm : GroundSegmentationConfig::Solver::MinCut;
-  for (auto _ : state) benchmark::DoNotOptimize(eval::segmentScan(scan.points, VoxelMapConfig{}, cfg).data());
+  cfg.solver = arg == 0 ? GroundSegmentationConfig::Solver::Icm : GroundSegmentationConfig::Solver::MinCut;
+  return cfg;
+}
+
+// real scans segmented one after another as 'terrain kitti' and a robot's sweeps are, by one
+// ScanSegmenter (its memory kept from scan to scan), by ICM (0) or min-cut (1): scans 000000 and
+// 000020 in turn, one per iteration
+void BM_KittiScanSegmentation(benchmark::State& state) {
+  const auto& scans = kittiScans();
+  ScanSegmenter segmenter(VoxelMapConfig{}, kittiSolver(state.range(0)));
+  segmenter.segment(scans[1]);
+  std::size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(segmenter.segment(scans[i++ % scans.size()]).data());
 }
 BENCHMARK(BM_KittiScanSegmentation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// the per-point step of that segmentation alone (labelScanPoints), on the min-cut voxel labels
+// the same with a segmenter made for each scan (its memory taken afresh, as a single call costs)
+void BM_KittiScanSegmentationFresh(benchmark::State& state) {
+  const auto& scans = kittiScans();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    ScanSegmenter segmenter(VoxelMapConfig{}, kittiSolver(state.range(0)));
+    benchmark::DoNotOptimize(segmenter.segment(scans[i++ % scans.size()]).data());
+  }
+}
+BENCHMARK(BM_KittiScanSegmentationFresh)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// the per-point step of that segmentation alone (labelScanPoints, its buffers kept), on scan
+// 000000's min-cut voxel labels
 void BM_KittiScanPointLabels(benchmark::State& state) {
-  static const rig::KittiScan scan =
-      rig::readKittiScan(std::string(TERRAIN_SOURCE_DIR) + "/tests/data/semantickitti/000000.bin");
-  const GroundSegmentationConfig cfg;
-  VoxelMap map(VoxelMapConfig{});
-  std::vector<std::uint32_t> voxel_of;
-  map.insert(scan.points, 0, nullptr, &voxel_of);
-  const std::vector<std::uint8_t> voxel_ground = segmentGroundLabels(map, cfg).refined;
-  for (auto _ : state) benchmark::DoNotOptimize(labelScanPoints(map, scan.points, voxel_of, voxel_ground, cfg).data());
+  const auto& points = kittiScans()[0];
+  ScanSegmenter segmenter(VoxelMapConfig{}, GroundSegmentationConfig{});
+  segmenter.segment(points);
+  PointLabelBuffers buffers;
+  std::vector<std::uint8_t> labels;
+  for (auto _ : state) {
+    labelScanPoints(segmenter.map(), points, segmenter.voxelOf(), segmenter.result().refined, segmenter.config(),
+                    buffers, labels);
+    benchmark::DoNotOptimize(labels.data());
+  }
 }
 BENCHMARK(BM_KittiScanPointLabels)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -589,9 +623,13 @@ int main(int argc, char** argv) {
                     "", ""});
   }
   if (const auto* r = get("BM_KittiScanSegmentation/0"))
-    rows.push_back({"KITTI scan 000000 segmentation, ICM", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
+    rows.push_back(
+        {"KITTI scans 000000 / 000020 in turn, segmentation, ICM", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
   if (const auto* r = get("BM_KittiScanSegmentation/1"))
-    rows.push_back({"KITTI scan 000000 segmentation, min-cut", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
+    rows.push_back(
+        {"KITTI scans 000000 / 000020 in turn, segmentation, min-cut", format("%.1f ms", ms(*r)), "<= 10 ms", ""});
+  if (const auto* r = get("BM_KittiScanSegmentationFresh/1"))
+    rows.push_back({"the same, min-cut, a segmenter made for each scan", format("%.1f ms", ms(*r)), "", ""});
   if (const auto* r = get("BM_KittiScanPointLabels"))
     rows.push_back({"KITTI scan 000000, of which the per-point step", format("%.1f ms", ms(*r)), "", ""});
 

@@ -101,6 +101,33 @@ TEST(VoxelMapTest, ManyPointsGiveTheVoxelsOfAPlainMap) {
   }
 }
 
+// A cleared map is empty, with no extent and no new voxels, and takes points in as a fresh map does
+// (the same ids, heights and extent), its grown table kept.
+TEST(VoxelMapTest, AClearedMapTakesPointsInAsAFreshOne) {
+  Random rng(7);
+  std::vector<Point3> many(20000), few = {Point3(0.3, -0.1, 0.2), Point3(2.0, 1.0, 0.1), Point3(0.35, -0.05, 0.25)};
+  for (Point3& p : many) p = Point3(rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(-2, 8));
+  VoxelMap map(VoxelMapConfig{0.2});
+  map.insert(many, 0);
+  const std::size_t grown = map.memoryBytes();
+  map.clear();
+  EXPECT_EQ(map.size(), 0u);
+  EXPECT_EQ(map.lowestIndex(), VoxelIndex(0, 0, 0));
+  EXPECT_EQ(map.highestIndex(), VoxelIndex(0, 0, 0));
+  EXPECT_EQ(map.memoryBytes(), grown);
+  EXPECT_TRUE(map.takeNewVoxels().empty());
+  EXPECT_EQ(map.find(map.indexOf(many[0])), -1);
+  VoxelMap fresh(VoxelMapConfig{0.2});
+  std::vector<std::uint32_t> kept_of, fresh_of;
+  EXPECT_EQ(map.insert(few, 3, nullptr, &kept_of), fresh.insert(few, 3, nullptr, &fresh_of));
+  EXPECT_EQ(kept_of, fresh_of);
+  EXPECT_EQ(map.size(), 2u);
+  EXPECT_EQ(map.voxels()[0].height, fresh.voxels()[0].height);
+  EXPECT_EQ(map.lowestIndex(), fresh.lowestIndex());
+  EXPECT_EQ(map.highestIndex(), fresh.highestIndex());
+  EXPECT_EQ(map.find(map.indexOf(few[1])), 1);
+}
+
 // The map keeps the extent of its voxels' indices as it grows, and a restored map has the extent of
 // what it holds; a restore refuses duplicate voxels and indices insert could not create.
 TEST(VoxelMapTest, KeepsTheExtentOfItsIndices) {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <string>
@@ -34,12 +35,39 @@ TEST(KittiTest, GroundSegmentationOfRealScans) {
     for (auto l : labels) truth.push_back(rig::isKittiGround(l)), skip.push_back(rig::isKittiIgnored(l));
     for (const bool per_point : {true, false}) {
       SCOPED_TRACE(per_point ? "default" : "voxel labels");
-      const auto pred =
-          segmentScan(scan.points, VoxelMapConfig{}, per_point ? GroundSegmentationConfig{} : voxels_only);
+      ScanSegmenter segmenter(VoxelMapConfig{}, per_point ? GroundSegmentationConfig{} : voxels_only);
+      const auto& pred = segmenter.segment(scan.points);
       const std::vector<bool> p(pred.begin(), pred.end());
       const BinaryScores s = binaryScores(p, truth, skip);
       EXPECT_GE(s.f1, (per_point ? floor : voxel_floor).at(name)) << name;
       EXPECT_GT(s.recall, 0.96) << name;
+    }
+  }
+}
+
+// A segmenter kept from scan to scan (its map, workspace and buffers reused, larger than the scan
+// needs after a bigger one) labels every scan as a segmenter made for it does, with either solver.
+TEST(KittiTest, ASegmenterKeptFromScanToScanLabelsEachAsAFreshOne) {
+  std::vector<std::vector<Point3>> scans;
+  for (const char* name : {"000000", "000020"})
+    scans.push_back(rig::readKittiScan(kData / (std::string(name) + ".bin")).points);
+  // the second scan cut to its points within 20 m: a smaller map after a bigger one
+  std::vector<Point3> near;
+  for (const Point3& p : scans[1])
+    if (p.head<2>().norm() < 20) near.push_back(p);
+  scans.push_back(near);
+  for (const auto solver : {GroundSegmentationConfig::Solver::MinCut, GroundSegmentationConfig::Solver::Icm}) {
+    GroundSegmentationConfig cfg;
+    cfg.solver = solver;
+    ScanSegmenter kept(VoxelMapConfig{}, cfg);
+    for (const std::size_t i : {0, 1, 2, 0}) {
+      SCOPED_TRACE(i);
+      const std::vector<std::uint8_t> labels = kept.segment(scans[i]);
+      ScanSegmenter fresh(VoxelMapConfig{}, cfg);
+      EXPECT_EQ(labels, fresh.segment(scans[i]));
+      EXPECT_EQ(kept.result().rough, fresh.result().rough);
+      EXPECT_EQ(kept.map().size(), fresh.map().size());
+      EXPECT_GT(std::count(labels.begin(), labels.end(), 1), static_cast<long>(scans[i].size() / 4));
     }
   }
 }
