@@ -6,6 +6,7 @@
 #include "core/ground/peak_histogram.hpp"
 #include "core/ground/plane_fit.hpp"
 #include "core/ground/tile_layout.hpp"
+#include "core/large_buffers.hpp"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -175,9 +176,9 @@ void setUnaries(Workspace& ws, std::size_t count, double cell, const GroundSegme
   const std::size_t m = count < layout.tiles().size() ? layout.column(count, 0) : layout.size();
   // every node's fields are written below or by linkNeighbours: only the vectors' sizes are set here
   GmrfProblem& p = ws.problem;
-  p.unary_ground.resize(m), p.unary_nonground.resize(m), p.parity.resize(m);
-  p.next.resize(3 * m), p.prev.resize(3 * m), p.weight.resize(3 * m);
-  ws.rough.resize(m);
+  resizeLarge(p.unary_ground, m), resizeLarge(p.unary_nonground, m), resizeLarge(p.parity, m);
+  resizeLarge(p.next, 3 * m), resizeLarge(p.prev, 3 * m), resizeLarge(p.weight, 3 * m);
+  resizeLarge(ws.rough, m);
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
     // arrays through pointers and settings by value held here: the compiler then need not read
     // them again after every store of a rough class (a byte, which may alias anything)
@@ -281,9 +282,9 @@ void segmentWhole(const VoxelMap& map, const GroundSegmentationConfig& cfg, Work
   const auto& voxels = map.voxels();
   const std::size_t n = voxels.size();
   // every voxel's entries are written below
-  out.rough.resize(n);
-  out.refined.resize(n);
-  out.ground_height.resize(n);
+  resizeLarge(out.rough, n);
+  resizeLarge(out.refined, n);
+  resizeLarge(out.ground_height, n);
   out.energy_rough = out.energy_refined = 0;
   out.iterations = out.tiles = 0;
   if (n == 0) return;

@@ -1,5 +1,7 @@
 #include "core/voxel_map.hpp"
 
+#include "core/large_buffers.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -44,7 +46,8 @@ std::int64_t VoxelMap::find(const VoxelIndex& index) const {
 }
 
 void VoxelMap::grow() {
-  std::vector<std::uint32_t> slots(slots_.size() * 2, kEmpty);
+  std::vector<std::uint32_t> slots;
+  assignLarge(slots, slots_.size() * 2, kEmpty);
   const std::size_t mask = slots.size() - 1;
   for (std::uint32_t id = 0; id < voxels_.size(); ++id) {
     std::size_t t = hashKey(pack(voxels_[id].index)) & mask;
@@ -73,7 +76,7 @@ bool VoxelMap::restore(std::vector<Voxel> voxels) {
   }
   std::size_t n = 1 << 16;
   while (n < 2 * (voxels_.size() + 1)) n *= 2;
-  slots_.assign(n, kEmpty);
+  assignLarge(slots_, n, kEmpty);
   const std::size_t mask = n - 1;
   for (std::uint32_t id = 0; id < voxels_.size(); ++id) {
     std::size_t t = hashKey(pack(voxels_[id].index)) & mask;
@@ -127,6 +130,8 @@ std::size_t VoxelMap::insert(const std::vector<Point3>& points, std::uint32_t fr
         lowest_ = lowest_.cwiseMin(index[j]), highest_ = highest_.cwiseMax(index[j]);
         Voxel v;
         v.index = index[j];
+        // grown as push_back grows them, into memory advised for huge pages
+        reserveLarge(voxels_, voxels_.size() + 1), reserveLarge(new_voxels_, new_voxels_.size() + 1);
         voxels_.push_back(v);
         new_voxels_.push_back(slots_[s]);
       }

@@ -4,6 +4,7 @@
 
 #include "core/ground/fast_math.hpp"
 #include "core/ground/parallel.hpp"
+#include "core/large_buffers.hpp"
 #include "core/voxel_map.hpp"
 
 #include <tbb/parallel_for.h>
@@ -280,7 +281,9 @@ class TileLayout {
   // the tile of a voxel of the map being built
   Tile tileOf(const Voxel& v) const { return {gx0_ + tile_x_(v.index.x()), gy0_ + tile_y_(v.index.y())}; }
 
-  void resizePositions(std::size_t n) { ids_.resize(n), z_.resize(n), height_.resize(n), placed_.resize(n); }
+  void resizePositions(std::size_t n) {
+    resizeLarge(ids_, n), resizeLarge(z_, n), resizeLarge(height_, n), resizeLarge(placed_, n);
+  }
   // puts voxel i, of tile t, at position q of its tile's voxels as placed
   void place(std::size_t q, std::uint32_t i, const Voxel& v, const Tile& t) {
     const auto local = static_cast<std::uint32_t>((v.index.y() - t.ty * k_) * k_ + (v.index.x() - t.tx * k_));
