@@ -105,10 +105,26 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
   BoundaryCoverage out;
   const cv::Mat& seg = f.segmentation;
   cv::Mat boundary(seg.size(), CV_8UC1, cv::Scalar(0));
+  // the depth of the surface a pixel looks at, along its ray through the true world; infinite for
+  // the sky (the robot's own geoms, which the caster leaves out, are nearer than anything)
+  const Point3 centre = f.world_from_camera.translation();
+  const auto depthAt = [&](int u, int v) {
+    const int g = seg.at<std::uint16_t>(v, u) - 1;
+    if (g < 0) return std::numeric_limits<double>::infinity();
+    if (world.geomClass(g) == scenes::GeomClass::Robot) return 0.0;
+    const sim::RayHit hit = world.castRay(centre, f.world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5)));
+    return hit.distance < 0 ? std::numeric_limits<double>::infinity() : hit.distance;
+  };
   for (int v = 1; v < seg.rows; ++v) {
     for (int u = 0; u < seg.cols; ++u) {
       const int g = seg.at<std::uint16_t>(v, u) - 1, above = seg.at<std::uint16_t>(v - 1, u) - 1;
-      if (scenes::isObjectClass(world.geomClass(g)) && g != above) boundary.at<std::uint8_t>(v, u) = 255;
+      if (!scenes::isObjectClass(world.geomClass(g)) || g == above) continue;
+      // a nearer surface above hides the object's top: that edge is the other's lower one
+      if (above >= 0 && depthAt(u, v - 1) <= depthAt(u, v)) {
+        ++out.occluded_pixels;
+        continue;
+      }
+      boundary.at<std::uint8_t>(v, u) = 255;
     }
   }
   out.boundary_pixels = static_cast<std::size_t>(cv::countNonZero(boundary));
@@ -148,6 +164,7 @@ CoverageScores scoreBoundaryCoverage(const TerrainMesh& mesh, const std::vector<
       k->before += b.before * b.boundary_pixels;
       k->after += b.after * b.boundary_pixels;
       k->pixels += b.boundary_pixels;
+      k->occluded += b.occluded_pixels;
       ++k->images;
     }
   }
@@ -517,15 +534,19 @@ json evaluateRun(const Pipeline& pipeline, const RunTruth& truth, const sim::Wor
                       {"camera", cameras.at(c.camera).name},
                       {"before", c.coverage.before},
                       {"after", c.coverage.after},
-                      {"boundary_pixels", c.coverage.boundary_pixels}});
+                      {"boundary_pixels", c.coverage.boundary_pixels},
+                      {"occluded_pixels", c.coverage.occluded_pixels}});
   }
   r["boundary_coverage"] = coverage.all.meanAfter();
   r["boundary_coverage_before"] = coverage.all.meanBefore();
   r["boundary_coverage_frames"] = frames;
   json& by_camera = r["boundary_coverage_by_camera"] = json::object();
   for (const auto& [camera, k] : coverage.by_camera) {
-    by_camera[cameras.at(camera).name] = {
-        {"after", k.meanAfter()}, {"before", k.meanBefore()}, {"boundary_pixels", k.pixels}, {"images", k.images}};
+    by_camera[cameras.at(camera).name] = {{"after", k.meanAfter()},
+                                          {"before", k.meanBefore()},
+                                          {"boundary_pixels", k.pixels},
+                                          {"occluded_pixels", k.occluded},
+                                          {"images", k.images}};
   }
   r["cameras"] = json::array();
   for (const auto& c : cameras) r["cameras"].push_back(c.name);

@@ -47,13 +47,18 @@ std::size_t keptFrameCount(const RunTruth& truth);
 struct BoundaryCoverage {
   double before = 0, after = 0;  // share of true top-boundary pixels reproduced
   std::size_t boundary_pixels = 0;
+  std::size_t occluded_pixels = 0;  // object edges under a nearer surface, left out
 };
 
 // Boundary coverage of one camera frame: the true top-boundary pixels are object pixels (building,
-// trunk, crown) whose upper neighbour belongs to another object, the ground or the sky; one is
-// reproduced when a vertex of the mesh over an object cell, projected at its height into the image,
-// lands within `tolerance` pixels of it. Computed for the sensed heights (before) and the
-// recovered heights with the roof cells of completed footprints (after).
+// trunk, crown) whose upper neighbour is the sky or belongs to another geom (object or ground) that
+// lies farther along its ray than the pixel's own surface: the object's outline against what is
+// behind it. Where the upper neighbour is nearer (a crown hiding the top of the trunk under it or
+// of a facade behind), the edge is the nearer surface's lower one and the object's top lies
+// elsewhere; no height field reproduces it, so such pixels are counted apart (occluded_pixels).
+// One is reproduced when a vertex of the mesh over an object cell, projected at its height into
+// the image, lands within `tolerance` pixels of it. Computed for the sensed heights (before) and
+// the recovered heights with the roof cells of completed footprints (after).
 BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<RoofCell>& roof, double voxel_size,
                                   const sim::World& world, const CameraIntrinsics& intrinsics,
                                   const CameraTruthFrame& frame, int tolerance);
@@ -62,7 +67,7 @@ BoundaryCoverage boundaryCoverage(const TerrainMesh& mesh, const std::vector<Roo
 // pixels over all of them and per camera (by index into the calibration's cameras).
 struct CoverageSum {
   double before = 0, after = 0;  // coverage times boundary pixels, summed
-  std::size_t pixels = 0, images = 0;
+  std::size_t pixels = 0, occluded = 0, images = 0;
   double meanBefore() const { return pixels ? before / pixels : 0.0; }
   double meanAfter() const { return pixels ? after / pixels : 0.0; }
 };

@@ -268,6 +268,19 @@ TEST(ObjectTopTest, TopsAreCountedAtTheirHeightAndTooHighPerClass) {
   EXPECT_TRUE(scoreObjectTops(h, {}, {}, *world).objects.empty());
 }
 
+// The true segmentation of a camera's image: the geom each pixel's centre ray meets, + 1 (0: sky).
+cv::Mat segmentationSeen(const sim::World& world, const CameraIntrinsics& k, const Pose& world_from_camera) {
+  cv::Mat seg(k.height, k.width, CV_16UC1, cv::Scalar(0));
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u) {
+      const Vector3 dir = world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5));
+      seg.at<std::uint16_t>(v, u) =
+          static_cast<std::uint16_t>(world.castRay(world_from_camera.translation(), dir).geom + 1);
+    }
+  }
+  return seg;
+}
+
 // A camera 1.6 m up looking east at the 20 m wall: from 40 m its top edge is in the image (the
 // pixels just below it look at the wall's top), from 8 m it is above the image (the topmost wall
 // pixels look at it 1.6 + 8 tan 30 deg = 6.2 m up, far below its top). Level, the camera sees the
@@ -287,15 +300,7 @@ TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtItItsLowerPartWhenIt
     f.world_from_camera.linear().col(1) = Vector3(std::sin(p), 0, -std::cos(p));  // down
     f.world_from_camera.linear().col(2) = Vector3(std::cos(p), 0, std::sin(p));   // forward: east, tilted up
     f.world_from_camera.translation() = Vector3(0, 0, 1.6);
-    // the true segmentation: the geom each pixel sees, + 1 (0: sky)
-    f.segmentation = cv::Mat(k.height, k.width, CV_16UC1, cv::Scalar(0));
-    for (int v = 0; v < k.height; ++v) {
-      for (int u = 0; u < k.width; ++u) {
-        const Vector3 dir = f.world_from_camera.linear() * pixelRay(k, Pixel(u + 0.5, v + 0.5));
-        f.segmentation.at<std::uint16_t>(v, u) =
-            static_cast<std::uint16_t>(world->castRay(f.world_from_camera.translation(), dir).geom + 1);
-      }
-    }
+    f.segmentation = segmentationSeen(*world, k, f.world_from_camera);
     RigCalibration calibration;
     calibration.cameras.push_back({"front", k, Pose::Identity()});
     const auto seen = topSeenFrames(*world, calibration, {f});
@@ -305,6 +310,40 @@ TEST(ObjectTopTest, ATopIsSeenWhenItsTopBoundaryPixelsLookAtItItsLowerPartWhenIt
     EXPECT_EQ(seen.at("wall").top, c.top);
     EXPECT_EQ(seen.at("wall").with_lower_part, c.with_lower_part);
   }
+}
+
+// A camera 1.6 m up looking east at a 20 m wall 40 m away, with a canopy nearer (x 20-21 m, y
+// +-3 m, z 8-12 m) hiding the wall's top: in the 32 columns the canopy spans (|u + 0.5 - 80| <=
+// 103.9 * 3 / 20), its top edge is against the sky and the wall's pixels right under its lower
+// edge have it above them, nearer. Those 32 are the canopy's edge, not the wall's top: left out.
+// Every column keeps one top-boundary pixel, the wall's against the sky or the canopy's.
+TEST(BoundaryCoverageTest, AnEdgeUnderANearerSurfaceIsNotATopBoundary) {
+  const std::string scene = R"(<mujoco>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <geom name="ground" type="plane" size="60 60 1"/>
+    <geom name="wall" type="box" pos="40.5 0 10" size="0.5 40 10" group="1"/>
+    <geom name="canopy" type="box" pos="20.5 0 10" size="0.5 3 2" group="1"/>
+  </worldbody>
+</mujoco>)";
+  scenes::SceneTruth truth = test::wallTruth(40);
+  scenes::ObjectTruth canopy = truth.objects[0];
+  canopy.id = "canopy", canopy.geoms = {"canopy"};
+  canopy.footprint = {{20, -3}, {21, -3}, {21, 3}, {20, 3}};
+  canopy.top_height = 12;
+  truth.objects.push_back(canopy);
+  const sim::World world(scene, truth);
+  const CameraIntrinsics k = CameraIntrinsics::fromFovy(160, 120, 60 * M_PI / 180);
+  CameraTruthFrame f;
+  f.world_from_camera.linear().col(0) = Vector3(0, -1, 0);  // right = south
+  f.world_from_camera.linear().col(1) = Vector3(0, 0, -1);  // down
+  f.world_from_camera.linear().col(2) = Vector3(1, 0, 0);   // forward = east
+  f.world_from_camera.translation() = Vector3(0, 0, 1.6);
+  f.segmentation = segmentationSeen(world, k, f.world_from_camera);
+  const BoundaryCoverage c = boundaryCoverage(TerrainMesh{}, {}, 0.2, world, k, f, 3);
+  EXPECT_EQ(c.boundary_pixels, 160u);
+  EXPECT_EQ(c.occluded_pixels, 32u);
+  EXPECT_EQ(c.after, 0.0);  // an empty mesh reproduces nothing
 }
 
 // The sensing period is the rig's, from the sweeps' start times (in any order, with a late frame
